@@ -1,0 +1,360 @@
+//! Samples of a signed distance function: a regular grid or scattered points.
+
+use glam::DVec3;
+
+use crate::{Aabb, Error, Result, Sphere};
+
+/// A regular grid of sample positions: `dims[0] x dims[1] x dims[2]` points, the point `(i, j, k)`
+/// at `origin + (i, j, k) * spacing`.
+///
+/// Values are stored in C order with z fastest: the flat index of `(i, j, k)` is
+/// `(i * dims[1] + j) * dims[2] + k`, the layout of a NumPy array of shape `dims` indexed
+/// `S[i, j, k]`. A grid with `n` cells per axis has `n + 1` points per axis, like
+/// `numpy.linspace(lo, hi, n + 1)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid {
+    dims: [usize; 3],
+    origin: DVec3,
+    spacing: DVec3,
+}
+
+impl Grid {
+    /// A grid from its point counts per axis, the position of point `(0, 0, 0)` and the spacing.
+    ///
+    /// # Errors
+    /// [`Error::InvalidGrid`] if a count is zero, the total overflows, the origin is not finite
+    /// or a spacing is not positive and finite.
+    pub fn new(dims: [usize; 3], origin: DVec3, spacing: DVec3) -> Result<Self> {
+        if dims.contains(&0) {
+            return Err(Error::InvalidGrid(format!("dimensions {dims:?} contain a zero")));
+        }
+        if dims.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d)).is_none() {
+            return Err(Error::InvalidGrid(format!("dimensions {dims:?} overflow the address space")));
+        }
+        if !origin.is_finite() {
+            return Err(Error::InvalidGrid(format!("origin {origin} is not finite")));
+        }
+        if !(spacing.cmpgt(DVec3::ZERO).all() && spacing.is_finite()) {
+            return Err(Error::InvalidGrid(format!("spacing {spacing} must be positive and finite")));
+        }
+        Ok(Self { dims, origin, spacing })
+    }
+
+    /// A grid whose corner points are `min` and `max`: the spacing along an axis with `d > 1`
+    /// points is `(max - min) / (d - 1)`, as `numpy.linspace(min, max, d)`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidGrid`] if the bounds are not finite, or `max <= min` along an axis with more
+    /// than one point (inverted or zero-size bounds), or as [`Grid::new`].
+    pub fn from_bounds(dims: [usize; 3], min: DVec3, max: DVec3) -> Result<Self> {
+        if !(min.is_finite() && max.is_finite()) {
+            return Err(Error::InvalidGrid(format!("bounds [{min}, {max}] are not finite")));
+        }
+        let mut spacing = DVec3::ONE;
+        for axis in 0..3 {
+            if dims[axis] > 1 {
+                if max[axis] <= min[axis] {
+                    return Err(Error::InvalidGrid(format!(
+                        "bounds along axis {axis} are inverted or of zero size: min {} >= max {}",
+                        min[axis], max[axis]
+                    )));
+                }
+                spacing[axis] = (max[axis] - min[axis]) / (dims[axis] - 1) as f64;
+            }
+        }
+        Self::new(dims, min, spacing)
+    }
+
+    /// The grid `linspace(lo, hi, n_cells + 1)` along each axis: the paper's "`n^3`" grid.
+    ///
+    /// # Errors
+    /// As [`Grid::from_bounds`].
+    pub fn cube(n_cells: usize, lo: f64, hi: f64) -> Result<Self> {
+        let d = n_cells.saturating_add(1);
+        Self::from_bounds([d; 3], DVec3::splat(lo), DVec3::splat(hi))
+    }
+
+    /// Points per axis.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Position of point `(0, 0, 0)`.
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+
+    /// Distance between neighbouring points along each axis.
+    pub fn spacing(&self) -> DVec3 {
+        self.spacing
+    }
+
+    /// Total number of points.
+    pub fn len(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// Whether the grid has no points (never true for a constructed grid).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Flat index of point `(i, j, k)` (C order, z fastest).
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        (i * self.dims[1] + j) * self.dims[2] + k
+    }
+
+    /// The `(i, j, k)` of a flat index.
+    pub fn ijk(&self, index: usize) -> [usize; 3] {
+        let k = index % self.dims[2];
+        let ij = index / self.dims[2];
+        [ij / self.dims[1], ij % self.dims[1], k]
+    }
+
+    /// Position of the point with flat index `index`.
+    pub fn position(&self, index: usize) -> DVec3 {
+        let [i, j, k] = self.ijk(index);
+        self.origin + DVec3::new(i as f64, j as f64, k as f64) * self.spacing
+    }
+
+    /// The box from the first to the last point.
+    pub fn bounds(&self) -> Aabb {
+        let last = DVec3::new((self.dims[0] - 1) as f64, (self.dims[1] - 1) as f64, (self.dims[2] - 1) as f64);
+        Aabb::new(self.origin, self.origin + last * self.spacing)
+    }
+}
+
+/// Where the samples are.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Layout {
+    /// On a regular grid.
+    Grid(Grid),
+    /// At arbitrary positions.
+    Scattered(Vec<DVec3>),
+}
+
+/// Counts of negative (inside), zero and positive (outside) values.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SignBalance {
+    /// Values `< 0`.
+    pub negative: usize,
+    /// Values `== 0`.
+    pub zero: usize,
+    /// Values `> 0`.
+    pub positive: usize,
+    /// Values that are NaN or infinite.
+    pub non_finite: usize,
+}
+
+impl SignBalance {
+    /// Counts the signs of `values`.
+    pub fn of(values: &[f64]) -> Self {
+        let mut b = Self::default();
+        for &v in values {
+            if !v.is_finite() {
+                b.non_finite += 1;
+            } else if v < 0.0 {
+                b.negative += 1;
+            } else if v > 0.0 {
+                b.positive += 1;
+            } else {
+                b.zero += 1;
+            }
+        }
+        b
+    }
+}
+
+/// Samples `(p_i, s_i)` of a signed distance function, negative inside, validated on construction.
+///
+/// Every sample is finite, there are at least two, and the values describe a surface: some are
+/// negative and some positive, or some are exactly zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SdfSamples {
+    layout: Layout,
+    values: Vec<f64>,
+}
+
+impl SdfSamples {
+    /// The smallest number of samples accepted.
+    pub const MIN_SAMPLES: usize = 2;
+
+    /// Samples on a grid; `values[grid.index(i, j, k)]` is the value at point `(i, j, k)`.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `values.len() != grid.len()`, then as [`SdfSamples::scattered`].
+    pub fn grid(grid: Grid, values: Vec<f64>) -> Result<Self> {
+        if values.len() != grid.len() {
+            return Err(Error::LengthMismatch {
+                expected_what: "grid points",
+                expected: grid.len(),
+                found_what: "values",
+                found: values.len(),
+            });
+        }
+        validate_values(&values)?;
+        Ok(Self { layout: Layout::Grid(grid), values })
+    }
+
+    /// Samples at scattered positions.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if the lengths differ, [`Error::TooFewSamples`] for fewer than two,
+    /// [`Error::NonFiniteValue`] or [`Error::NonFinitePosition`] naming the first bad sample,
+    /// [`Error::NoSignChange`] when every value is positive or every value negative.
+    pub fn scattered(positions: Vec<DVec3>, values: Vec<f64>) -> Result<Self> {
+        if values.len() != positions.len() {
+            return Err(Error::LengthMismatch {
+                expected_what: "positions",
+                expected: positions.len(),
+                found_what: "values",
+                found: values.len(),
+            });
+        }
+        if let Some((index, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+            return Err(Error::NonFinitePosition { what: "sample", index, x: p.x, y: p.y, z: p.z });
+        }
+        validate_values(&values)?;
+        Ok(Self { layout: Layout::Scattered(positions), values })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Whether there are no samples (never true for constructed samples).
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// The SDF values.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// Where the samples are.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The grid, for gridded samples.
+    pub fn as_grid(&self) -> Option<&Grid> {
+        match &self.layout {
+            Layout::Grid(g) => Some(g),
+            Layout::Scattered(_) => None,
+        }
+    }
+
+    /// Position of sample `index`.
+    pub fn position(&self, index: usize) -> DVec3 {
+        match &self.layout {
+            Layout::Grid(g) => g.position(index),
+            Layout::Scattered(p) => p[index],
+        }
+    }
+
+    /// All positions, in sample order.
+    pub fn positions(&self) -> Vec<DVec3> {
+        match &self.layout {
+            Layout::Grid(g) => (0..g.len()).map(|i| g.position(i)).collect(),
+            Layout::Scattered(p) => p.clone(),
+        }
+    }
+
+    /// Sample `index` as a sphere of radius `|s|`.
+    pub fn sphere(&self, index: usize) -> Sphere {
+        Sphere::new(self.position(index), self.values[index].abs())
+    }
+
+    /// Bounding box of the sample positions.
+    pub fn bounds(&self) -> Aabb {
+        match &self.layout {
+            Layout::Grid(g) => g.bounds(),
+            Layout::Scattered(p) => Aabb::from_points(p),
+        }
+    }
+
+    /// Counts of negative, zero and positive values.
+    pub fn sign_balance(&self) -> SignBalance {
+        SignBalance::of(&self.values)
+    }
+}
+
+fn validate_values(values: &[f64]) -> Result<()> {
+    if values.len() < SdfSamples::MIN_SAMPLES {
+        return Err(Error::TooFewSamples { found: values.len(), needed: SdfSamples::MIN_SAMPLES });
+    }
+    if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(Error::NonFiniteValue { index, value });
+    }
+    let b = SignBalance::of(values);
+    if b.zero == 0 && (b.negative == 0 || b.positive == 0) {
+        let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let sign = if b.negative == 0 { "positive (outside)" } else { "negative (inside)" };
+        return Err(Error::NoSignChange { n: values.len(), sign, min, max });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_layout_is_c_order_z_fastest_like_numpy_linspace() {
+        let g = Grid::cube(2, -1.0, 1.0).expect("valid");
+        assert_eq!(g.dims(), [3, 3, 3]);
+        assert_eq!(g.index(0, 0, 1), 1);
+        assert_eq!(g.index(1, 0, 0), 9);
+        assert_eq!(g.position(g.index(2, 1, 0)), DVec3::new(1.0, 0.0, -1.0));
+        assert_eq!(g.ijk(g.index(2, 1, 0)), [2, 1, 0]);
+        assert_eq!(g.bounds(), Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)));
+    }
+
+    #[test]
+    fn each_bad_input_gets_its_own_error() {
+        let g = Grid::cube(1, 0.0, 1.0).expect("valid");
+        let ok = vec![-1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
+        assert!(SdfSamples::grid(g, ok.clone()).is_ok());
+        assert!(matches!(
+            SdfSamples::grid(g, vec![1.0; 7]),
+            Err(Error::LengthMismatch { expected: 8, found: 7, .. })
+        ));
+        let mut nan = ok.clone();
+        nan[5] = f64::NAN;
+        assert!(matches!(SdfSamples::grid(g, nan), Err(Error::NonFiniteValue { index: 5, .. })));
+        let mut inf = ok.clone();
+        inf[3] = f64::INFINITY;
+        assert!(matches!(SdfSamples::grid(g, inf), Err(Error::NonFiniteValue { index: 3, .. })));
+        assert!(matches!(SdfSamples::grid(g, vec![0.5; 8]), Err(Error::NoSignChange { n: 8, .. })));
+        assert!(matches!(SdfSamples::grid(g, vec![-0.5; 8]), Err(Error::NoSignChange { .. })));
+        // A zero value lies on the surface: accepted.
+        let mut zero = vec![0.5; 8];
+        zero[0] = 0.0;
+        assert!(SdfSamples::grid(g, zero).is_ok());
+        assert!(matches!(
+            SdfSamples::scattered(vec![DVec3::ZERO], vec![-1.0]),
+            Err(Error::TooFewSamples { found: 1, needed: 2 })
+        ));
+        assert!(matches!(
+            SdfSamples::scattered(vec![DVec3::ZERO, DVec3::new(0.0, f64::NAN, 0.0)], vec![-1.0, 1.0]),
+            Err(Error::NonFinitePosition { index: 1, .. })
+        ));
+        assert!(matches!(
+            SdfSamples::scattered(vec![DVec3::ZERO; 3], vec![-1.0, 1.0]),
+            Err(Error::LengthMismatch { expected: 3, found: 2, .. })
+        ));
+    }
+
+    #[test]
+    fn grids_reject_bad_shapes() {
+        assert!(Grid::new([0, 2, 2], DVec3::ZERO, DVec3::ONE).is_err());
+        assert!(Grid::new([2, 2, 2], DVec3::ZERO, DVec3::new(1.0, 0.0, 1.0)).is_err());
+        assert!(Grid::new([2, 2, 2], DVec3::NAN, DVec3::ONE).is_err());
+        assert!(Grid::from_bounds([2, 2, 2], DVec3::ONE, DVec3::ZERO).is_err());
+        assert!(Grid::from_bounds([2, 2, 2], DVec3::ONE, DVec3::ONE).is_err());
+        assert!(Grid::new([usize::MAX, 2, 2], DVec3::ZERO, DVec3::ONE).is_err());
+    }
+}
