@@ -16,7 +16,10 @@ pub struct Aabb {
 
 impl Aabb {
     /// The empty box, the identity of [`Aabb::union`].
-    pub const EMPTY: Self = Self { min: DVec3::INFINITY, max: DVec3::NEG_INFINITY };
+    pub const EMPTY: Self = Self {
+        min: DVec3::INFINITY,
+        max: DVec3::NEG_INFINITY,
+    };
 
     /// A box from its corners.
     pub const fn new(min: DVec3, max: DVec3) -> Self {
@@ -35,22 +38,35 @@ impl Aabb {
 
     /// This box grown to hold `p`.
     pub fn grow(self, p: DVec3) -> Self {
-        Self { min: self.min.min(p), max: self.max.max(p) }
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
     }
 
     /// The smallest box holding both boxes.
     pub fn union(self, other: Self) -> Self {
-        Self { min: self.min.min(other.min), max: self.max.max(other.max) }
+        Self {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
     }
 
     /// The box grown by `pad` on every side.
     pub fn padded(self, pad: f64) -> Self {
-        Self { min: self.min - DVec3::splat(pad), max: self.max + DVec3::splat(pad) }
+        Self {
+            min: self.min - DVec3::splat(pad),
+            max: self.max + DVec3::splat(pad),
+        }
     }
 
     /// Side lengths (zero for the empty box).
     pub fn extent(&self) -> DVec3 {
-        if self.is_empty() { DVec3::ZERO } else { self.max - self.min }
+        if self.is_empty() {
+            DVec3::ZERO
+        } else {
+            self.max - self.min
+        }
     }
 
     /// The longest side length.

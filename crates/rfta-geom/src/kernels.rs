@@ -53,7 +53,11 @@ pub fn sphere_sphere_circle(a: &Sphere, b: &Sphere) -> SphereSphere {
     let delta = b.center - a.center;
     let d = delta.length();
     if d == 0.0 {
-        return if a.radius == b.radius { SphereSphere::Coincident } else { SphereSphere::Nested };
+        return if a.radius == b.radius {
+            SphereSphere::Coincident
+        } else {
+            SphereSphere::Nested
+        };
     }
     if d > a.radius + b.radius {
         return SphereSphere::Separate;
@@ -63,10 +67,15 @@ pub fn sphere_sphere_circle(a: &Sphere, b: &Sphere) -> SphereSphere {
     }
     let normal = delta / d;
     // Distance from a's centre to the circle's plane, clamped to [-ra, ra] against rounding.
-    let along = ((a.radius * a.radius - b.radius * b.radius + d * d) / (2.0 * d)).clamp(-a.radius, a.radius);
+    let along = ((a.radius * a.radius - b.radius * b.radius + d * d) / (2.0 * d))
+        .clamp(-a.radius, a.radius);
     // ra^2 - along^2, factored to limit cancellation.
     let h2 = (a.radius - along) * (a.radius + along);
-    SphereSphere::Circle(Circle { center: a.center + along * normal, normal, radius: h2.max(0.0).sqrt() })
+    SphereSphere::Circle(Circle {
+        center: a.center + along * normal,
+        normal,
+        radius: h2.max(0.0).sqrt(),
+    })
 }
 
 /// The points common to three spheres' surfaces (trilateration, Fang 1986).
@@ -100,7 +109,11 @@ pub fn trilaterate(a: &Sphere, b: &Sphere, c: &Sphere) -> Option<[DVec3; 2]> {
     }
     let ey = perp / j;
     let ez = ex.cross(ey);
-    let (ra2, rb2, rc2) = (a.radius * a.radius, b.radius * b.radius, c.radius * c.radius);
+    let (ra2, rb2, rc2) = (
+        a.radius * a.radius,
+        b.radius * b.radius,
+        c.radius * c.radius,
+    );
     let x = (ra2 - rb2 + d * d) / (2.0 * d);
     let y = (ra2 - rc2 + i * i + j * j) / (2.0 * j) - (i / j) * x;
     let mut z2 = ra2 - x * x - y * y;
@@ -123,7 +136,11 @@ pub fn closest_point_on_circle(circle: &Circle, x: DVec3) -> DVec3 {
     let v = x - circle.center;
     let in_plane = v - circle.normal * v.dot(circle.normal);
     let len = in_plane.length();
-    let dir = if len > 0.0 && len.is_finite() { in_plane / len } else { fallback_perpendicular(circle.normal) };
+    let dir = if len > 0.0 && len.is_finite() {
+        in_plane / len
+    } else {
+        fallback_perpendicular(circle.normal)
+    };
     circle.center + circle.radius * dir
 }
 
@@ -133,7 +150,11 @@ pub fn closest_point_on_circle(circle: &Circle, x: DVec3) -> DVec3 {
 pub fn project_onto_sphere(sphere: &Sphere, x: DVec3) -> DVec3 {
     let v = x - sphere.center;
     let len = v.length();
-    let dir = if len > 0.0 && len.is_finite() { v / len } else { DVec3::X };
+    let dir = if len > 0.0 && len.is_finite() {
+        v / len
+    } else {
+        DVec3::X
+    };
     sphere.center + sphere.radius * dir
 }
 
@@ -159,7 +180,11 @@ pub fn transport_on_sphere(sphere: &Sphere, from: DVec3, to: DVec3, arc_length: 
     if !(theta > 0.0) {
         return start;
     }
-    let axis = if sin > 1e-300 { cross / sin } else { fallback_perpendicular(u) };
+    let axis = if sin > 1e-300 {
+        cross / sin
+    } else {
+        fallback_perpendicular(u)
+    };
     // Rodrigues' rotation of u about an axis perpendicular to it.
     let rotated = u * theta.cos() + axis.cross(u) * theta.sin();
     sphere.center + sphere.radius * rotated.normalize_or(u)
@@ -241,7 +266,11 @@ fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, [f64; 3])
     let seg = |u: DVec3, v: DVec3| -> (DVec3, f64) {
         let e = v - u;
         let len2 = e.length_squared();
-        let t = if len2 > 0.0 { ((p - u).dot(e) / len2).clamp(0.0, 1.0) } else { 0.0 };
+        let t = if len2 > 0.0 {
+            ((p - u).dot(e) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         (u + t * e, t)
     };
     let (q_ab, t_ab) = seg(a, b);

@@ -36,13 +36,23 @@ impl TriMesh {
     pub fn validate(&self) -> Result<()> {
         for (index, v) in self.vertices.iter().enumerate() {
             if !v.is_finite() {
-                return Err(Error::NonFinitePosition { what: "vertex", index, x: v.x, y: v.y, z: v.z });
+                return Err(Error::NonFinitePosition {
+                    what: "vertex",
+                    index,
+                    x: v.x,
+                    y: v.y,
+                    z: v.z,
+                });
             }
         }
         let n_vertices = self.vertices.len();
         for (face, f) in self.faces.iter().enumerate() {
             if let Some(&vertex) = f.iter().find(|&&i| i as usize >= n_vertices) {
-                return Err(Error::FaceIndexOutOfRange { face, vertex, n_vertices });
+                return Err(Error::FaceIndexOutOfRange {
+                    face,
+                    vertex,
+                    n_vertices,
+                });
             }
         }
         Ok(())
@@ -79,7 +89,9 @@ impl TriMesh {
 
     /// Total surface area.
     pub fn area(&self) -> f64 {
-        (0..self.n_faces()).map(|f| 0.5 * self.face_normal_scaled(f).length()).sum()
+        (0..self.n_faces())
+            .map(|f| 0.5 * self.face_normal_scaled(f).length())
+            .sum()
     }
 
     /// Signed enclosed volume (positive for a closed, outward-oriented mesh), by the divergence theorem.
@@ -97,7 +109,10 @@ impl TriMesh {
         if self.faces.is_empty() {
             return Aabb::from_points(&self.vertices);
         }
-        self.faces.iter().flatten().fold(Aabb::EMPTY, |b, &i| b.grow(self.vertices[i as usize]))
+        self.faces
+            .iter()
+            .flatten()
+            .fold(Aabb::EMPTY, |b, &i| b.grow(self.vertices[i as usize]))
     }
 
     /// Applies `f` to every vertex.

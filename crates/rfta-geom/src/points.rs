@@ -20,7 +20,11 @@ impl OrientedPoints {
     /// [`Error::LengthMismatch`] when the arrays differ in length, [`Error::NonFinitePosition`]
     /// for a NaN or infinite position, [`Error::DegenerateNormal`] for a zero or non-finite normal,
     /// [`Error::InvalidWeight`] for a negative or non-finite weight.
-    pub fn new(positions: Vec<DVec3>, normals: Vec<DVec3>, weights: Option<Vec<f64>>) -> Result<Self> {
+    pub fn new(
+        positions: Vec<DVec3>,
+        normals: Vec<DVec3>,
+        weights: Option<Vec<f64>>,
+    ) -> Result<Self> {
         if normals.len() != positions.len() {
             return Err(Error::LengthMismatch {
                 expected_what: "positions",
@@ -41,7 +45,13 @@ impl OrientedPoints {
         }
         for (index, p) in positions.iter().enumerate() {
             if !p.is_finite() {
-                return Err(Error::NonFinitePosition { what: "point", index, x: p.x, y: p.y, z: p.z });
+                return Err(Error::NonFinitePosition {
+                    what: "point",
+                    index,
+                    x: p.x,
+                    y: p.y,
+                    z: p.z,
+                });
             }
         }
         let mut unit = Vec::with_capacity(normals.len());
@@ -53,11 +63,18 @@ impl OrientedPoints {
             unit.push(*n / len);
         }
         if let Some(w) = &weights
-            && let Some((index, &value)) = w.iter().enumerate().find(|(_, w)| !(**w >= 0.0 && w.is_finite()))
+            && let Some((index, &value)) = w
+                .iter()
+                .enumerate()
+                .find(|(_, w)| !(**w >= 0.0 && w.is_finite()))
         {
             return Err(Error::InvalidWeight { index, value });
         }
-        Ok(Self { positions, normals: unit, weights })
+        Ok(Self {
+            positions,
+            normals: unit,
+            weights,
+        })
     }
 
     /// Number of points.

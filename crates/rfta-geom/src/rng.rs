@@ -89,7 +89,10 @@ mod tests {
             counts[rng.below(6) as usize] += 1;
         }
         // Expected 10,000 each, sd ~ 91: allow 5 sigma.
-        assert!(counts.iter().all(|&c| (c as i64 - 10_000).abs() < 460), "{counts:?}");
+        assert!(
+            counts.iter().all(|&c| (c as i64 - 10_000).abs() < 460),
+            "{counts:?}"
+        );
     }
 
     #[test]

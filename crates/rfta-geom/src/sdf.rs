@@ -26,18 +26,32 @@ impl Grid {
     /// or a spacing is not positive and finite.
     pub fn new(dims: [usize; 3], origin: DVec3, spacing: DVec3) -> Result<Self> {
         if dims.contains(&0) {
-            return Err(Error::InvalidGrid(format!("dimensions {dims:?} contain a zero")));
+            return Err(Error::InvalidGrid(format!(
+                "dimensions {dims:?} contain a zero"
+            )));
         }
-        if dims.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d)).is_none() {
-            return Err(Error::InvalidGrid(format!("dimensions {dims:?} overflow the address space")));
+        if dims
+            .iter()
+            .try_fold(1usize, |acc, &d| acc.checked_mul(d))
+            .is_none()
+        {
+            return Err(Error::InvalidGrid(format!(
+                "dimensions {dims:?} overflow the address space"
+            )));
         }
         if !origin.is_finite() {
             return Err(Error::InvalidGrid(format!("origin {origin} is not finite")));
         }
         if !(spacing.cmpgt(DVec3::ZERO).all() && spacing.is_finite()) {
-            return Err(Error::InvalidGrid(format!("spacing {spacing} must be positive and finite")));
+            return Err(Error::InvalidGrid(format!(
+                "spacing {spacing} must be positive and finite"
+            )));
         }
-        Ok(Self { dims, origin, spacing })
+        Ok(Self {
+            dims,
+            origin,
+            spacing,
+        })
     }
 
     /// A grid whose corner points are `min` and `max`: the spacing along an axis with `d > 1`
@@ -48,7 +62,9 @@ impl Grid {
     /// than one point (inverted or zero-size bounds), or as [`Grid::new`].
     pub fn from_bounds(dims: [usize; 3], min: DVec3, max: DVec3) -> Result<Self> {
         if !(min.is_finite() && max.is_finite()) {
-            return Err(Error::InvalidGrid(format!("bounds [{min}, {max}] are not finite")));
+            return Err(Error::InvalidGrid(format!(
+                "bounds [{min}, {max}] are not finite"
+            )));
         }
         let mut spacing = DVec3::ONE;
         for axis in 0..3 {
@@ -119,7 +135,11 @@ impl Grid {
 
     /// The box from the first to the last point.
     pub fn bounds(&self) -> Aabb {
-        let last = DVec3::new((self.dims[0] - 1) as f64, (self.dims[1] - 1) as f64, (self.dims[2] - 1) as f64);
+        let last = DVec3::new(
+            (self.dims[0] - 1) as f64,
+            (self.dims[1] - 1) as f64,
+            (self.dims[2] - 1) as f64,
+        );
         Aabb::new(self.origin, self.origin + last * self.spacing)
     }
 }
@@ -193,7 +213,10 @@ impl SdfSamples {
             });
         }
         validate_values(&values)?;
-        Ok(Self { layout: Layout::Grid(grid), values })
+        Ok(Self {
+            layout: Layout::Grid(grid),
+            values,
+        })
     }
 
     /// Samples at scattered positions.
@@ -212,10 +235,19 @@ impl SdfSamples {
             });
         }
         if let Some((index, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-            return Err(Error::NonFinitePosition { what: "sample", index, x: p.x, y: p.y, z: p.z });
+            return Err(Error::NonFinitePosition {
+                what: "sample",
+                index,
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            });
         }
         validate_values(&values)?;
-        Ok(Self { layout: Layout::Scattered(positions), values })
+        Ok(Self {
+            layout: Layout::Scattered(positions),
+            values,
+        })
     }
 
     /// Number of samples.
@@ -283,7 +315,10 @@ impl SdfSamples {
 
 fn validate_values(values: &[f64]) -> Result<()> {
     if values.len() < SdfSamples::MIN_SAMPLES {
-        return Err(Error::TooFewSamples { found: values.len(), needed: SdfSamples::MIN_SAMPLES });
+        return Err(Error::TooFewSamples {
+            found: values.len(),
+            needed: SdfSamples::MIN_SAMPLES,
+        });
     }
     if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(Error::NonFiniteValue { index, value });
@@ -292,8 +327,17 @@ fn validate_values(values: &[f64]) -> Result<()> {
     if b.zero == 0 && (b.negative == 0 || b.positive == 0) {
         let min = values.iter().copied().fold(f64::INFINITY, f64::min);
         let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let sign = if b.negative == 0 { "positive (outside)" } else { "negative (inside)" };
-        return Err(Error::NoSignChange { n: values.len(), sign, min, max });
+        let sign = if b.negative == 0 {
+            "positive (outside)"
+        } else {
+            "negative (inside)"
+        };
+        return Err(Error::NoSignChange {
+            n: values.len(),
+            sign,
+            min,
+            max,
+        });
     }
     Ok(())
 }
@@ -320,31 +364,57 @@ mod tests {
         assert!(SdfSamples::grid(g, ok.clone()).is_ok());
         assert!(matches!(
             SdfSamples::grid(g, vec![1.0; 7]),
-            Err(Error::LengthMismatch { expected: 8, found: 7, .. })
+            Err(Error::LengthMismatch {
+                expected: 8,
+                found: 7,
+                ..
+            })
         ));
         let mut nan = ok.clone();
         nan[5] = f64::NAN;
-        assert!(matches!(SdfSamples::grid(g, nan), Err(Error::NonFiniteValue { index: 5, .. })));
+        assert!(matches!(
+            SdfSamples::grid(g, nan),
+            Err(Error::NonFiniteValue { index: 5, .. })
+        ));
         let mut inf = ok.clone();
         inf[3] = f64::INFINITY;
-        assert!(matches!(SdfSamples::grid(g, inf), Err(Error::NonFiniteValue { index: 3, .. })));
-        assert!(matches!(SdfSamples::grid(g, vec![0.5; 8]), Err(Error::NoSignChange { n: 8, .. })));
-        assert!(matches!(SdfSamples::grid(g, vec![-0.5; 8]), Err(Error::NoSignChange { .. })));
+        assert!(matches!(
+            SdfSamples::grid(g, inf),
+            Err(Error::NonFiniteValue { index: 3, .. })
+        ));
+        assert!(matches!(
+            SdfSamples::grid(g, vec![0.5; 8]),
+            Err(Error::NoSignChange { n: 8, .. })
+        ));
+        assert!(matches!(
+            SdfSamples::grid(g, vec![-0.5; 8]),
+            Err(Error::NoSignChange { .. })
+        ));
         // A zero value lies on the surface: accepted.
         let mut zero = vec![0.5; 8];
         zero[0] = 0.0;
         assert!(SdfSamples::grid(g, zero).is_ok());
         assert!(matches!(
             SdfSamples::scattered(vec![DVec3::ZERO], vec![-1.0]),
-            Err(Error::TooFewSamples { found: 1, needed: 2 })
+            Err(Error::TooFewSamples {
+                found: 1,
+                needed: 2
+            })
         ));
         assert!(matches!(
-            SdfSamples::scattered(vec![DVec3::ZERO, DVec3::new(0.0, f64::NAN, 0.0)], vec![-1.0, 1.0]),
+            SdfSamples::scattered(
+                vec![DVec3::ZERO, DVec3::new(0.0, f64::NAN, 0.0)],
+                vec![-1.0, 1.0]
+            ),
             Err(Error::NonFinitePosition { index: 1, .. })
         ));
         assert!(matches!(
             SdfSamples::scattered(vec![DVec3::ZERO; 3], vec![-1.0, 1.0]),
-            Err(Error::LengthMismatch { expected: 3, found: 2, .. })
+            Err(Error::LengthMismatch {
+                expected: 3,
+                found: 2,
+                ..
+            })
         ));
     }
 

@@ -12,11 +12,27 @@ use crate::TriMesh;
 
 /// The regular octahedron with vertices at `+-radius` on each axis (6 vertices, 8 faces).
 pub fn octahedron(radius: f64) -> TriMesh {
-    let vertices = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z]
-        .into_iter()
-        .map(|v| v * radius)
-        .collect();
-    let faces = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    let vertices = vec![
+        DVec3::X,
+        -DVec3::X,
+        DVec3::Y,
+        -DVec3::Y,
+        DVec3::Z,
+        -DVec3::Z,
+    ]
+    .into_iter()
+    .map(|v| v * radius)
+    .collect();
+    let faces = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
     TriMesh { vertices, faces }
 }
 
@@ -97,7 +113,11 @@ pub fn torus(major: f64, minor: f64, n_major: u32, n_minor: u32) -> TriMesh {
         for j in 0..nv {
             let phi = TAU * j as f64 / nv as f64;
             let ring = major + minor * phi.cos();
-            vertices.push(DVec3::new(ring * theta.cos(), ring * theta.sin(), minor * phi.sin()));
+            vertices.push(DVec3::new(
+                ring * theta.cos(),
+                ring * theta.sin(),
+                minor * phi.sin(),
+            ));
         }
     }
     let id = |i: u32, j: u32| (i % nu) * nv + (j % nv);
@@ -118,9 +138,18 @@ pub fn cuboid(half: DVec3) -> TriMesh {
         .map(|i| DVec3::new(bit(i, 0), bit(i, 1), bit(i, 2)) * half)
         .collect();
     // Quads per face (corner index bits: x = 1, y = 2, z = 4), split into two triangles.
-    let quads: [[u32; 4]; 6] =
-        [[0, 2, 6, 4], [1, 5, 7, 3], [0, 4, 5, 1], [2, 3, 7, 6], [0, 1, 3, 2], [4, 6, 7, 5]];
-    let faces = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    let quads: [[u32; 4]; 6] = [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ];
+    let faces = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
     let mut mesh = TriMesh { vertices, faces };
     orient_convex_outward(&mut mesh);
     mesh
@@ -151,12 +180,18 @@ mod tests {
         // Volumes of inscribed polyhedra approach the analytic ones from below.
         let ico = icosphere(1.0, 4);
         let v = ico.signed_volume();
-        assert!(v > 0.99 * 4.0 / 3.0 * PI && v < 4.0 / 3.0 * PI, "sphere volume {v}");
+        assert!(
+            v > 0.99 * 4.0 / 3.0 * PI && v < 4.0 / 3.0 * PI,
+            "sphere volume {v}"
+        );
         assert_eq!((ico.n_vertices(), ico.n_faces()), (2562, 5120));
         let t = torus(0.6, 0.25, 96, 48);
         let vt = t.signed_volume();
         let exact = 2.0 * PI * PI * 0.6 * 0.25 * 0.25;
-        assert!(vt > 0.99 * exact && vt < exact, "torus volume {vt} vs {exact}");
+        assert!(
+            vt > 0.99 * exact && vt < exact,
+            "torus volume {vt} vs {exact}"
+        );
         let c = cuboid(DVec3::new(0.5, 1.0, 1.5));
         assert!((c.signed_volume() - 6.0).abs() < 1e-12);
         assert!((c.area() - 2.0 * (2.0 + 3.0 + 6.0)).abs() < 1e-12);

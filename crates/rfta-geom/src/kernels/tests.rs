@@ -143,20 +143,32 @@ fn transport_handles_antipodal_and_coincident_points() {
     let quarter = 0.25 * std::f64::consts::FRAC_PI_2;
     let p = transport_on_sphere(&s, a, q, quarter);
     assert!(p.is_finite());
-    assert!((p - s.center).z.abs() < 1e-15, "a quarter turn from the pole reaches the equator: {p}");
+    assert!(
+        (p - s.center).z.abs() < 1e-15,
+        "a quarter turn from the pole reaches the equator: {p}"
+    );
     assert_eq!(transport_on_sphere(&s, a, a, 1.0), a);
     // A point at the centre has no direction: it is projected along +x, never NaN.
     assert!(transport_on_sphere(&s, s.center, q, 0.1).is_finite());
     // Zero radius: the centre.
-    assert_eq!(transport_on_sphere(&Sphere::new(DVec3::ONE, 0.0), DVec3::ZERO, DVec3::X, 1.0), DVec3::ONE);
+    assert_eq!(
+        transport_on_sphere(&Sphere::new(DVec3::ONE, 0.0), DVec3::ZERO, DVec3::X, 1.0),
+        DVec3::ONE
+    );
 }
 
 #[test]
 fn degenerate_sphere_pairs_and_triples() {
     let a = Sphere::new(DVec3::ZERO, 1.0);
     assert_eq!(sphere_sphere_circle(&a, &a), SphereSphere::Coincident);
-    assert_eq!(sphere_sphere_circle(&a, &Sphere::new(DVec3::ZERO, 0.5)), SphereSphere::Nested);
-    assert_eq!(sphere_sphere_circle(&a, &Sphere::new(DVec3::X * 3.0, 1.0)), SphereSphere::Separate);
+    assert_eq!(
+        sphere_sphere_circle(&a, &Sphere::new(DVec3::ZERO, 0.5)),
+        SphereSphere::Nested
+    );
+    assert_eq!(
+        sphere_sphere_circle(&a, &Sphere::new(DVec3::X * 3.0, 1.0)),
+        SphereSphere::Separate
+    );
     // Touching spheres meet in a circle of radius zero at the touching point.
     let touch = sphere_sphere_circle(&a, &Sphere::new(DVec3::X * 2.0, 1.0)).circle();
     assert_eq!(touch.map(|c| (c.center, c.radius)), Some((DVec3::X, 0.0)));
@@ -165,12 +177,19 @@ fn degenerate_sphere_pairs_and_triples() {
     assert_eq!(trilaterate(&a, &b, &Sphere::new(DVec3::X * 2.0, 1.0)), None);
     assert_eq!(trilaterate(&a, &a, &b), None);
     // Three unit spheres around the origin's octant meet at two mirror points.
-    let pts = trilaterate(&Sphere::new(DVec3::X, 1.0), &Sphere::new(DVec3::Y, 1.0), &Sphere::new(DVec3::Z, 1.0));
+    let pts = trilaterate(
+        &Sphere::new(DVec3::X, 1.0),
+        &Sphere::new(DVec3::Y, 1.0),
+        &Sphere::new(DVec3::Z, 1.0),
+    );
     let pts = pts.expect("three unit spheres at the axes meet");
     // The common points are (0,0,0) and (2/3,2/3,2/3).
     let expected = [DVec3::ZERO, DVec3::splat(2.0 / 3.0)];
     for e in expected {
-        assert!(pts.iter().any(|p| p.distance(e) < 1e-14), "{pts:?} misses {e}");
+        assert!(
+            pts.iter().any(|p| p.distance(e) < 1e-14),
+            "{pts:?} misses {e}"
+        );
     }
 }
 
@@ -189,10 +208,13 @@ fn closest_point_on_degenerate_triangles() {
 fn solid_angles_of_a_closed_octahedron_sum_to_4pi_inside_and_0_outside() {
     let mesh = crate::shapes::octahedron(1.0);
     let total = |p: DVec3| -> f64 {
-        mesh.faces.iter().map(|f| {
-            let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
-            solid_angle(p, a, b, c)
-        }).sum()
+        mesh.faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
+                solid_angle(p, a, b, c)
+            })
+            .sum()
     };
     assert!((total(DVec3::new(0.1, -0.2, 0.05)) - 4.0 * std::f64::consts::PI).abs() < 1e-12);
     assert!(total(DVec3::new(2.0, 0.3, 0.1)).abs() < 1e-12);
