@@ -1,1 +1,77 @@
-fn main() {}
+//! The `rfta` command-line tool.
+//!
+//! Exit status: 0 on success, 1 when the work failed (the message says which file and why),
+//! 2 for invalid command-line usage.
+
+#![expect(clippy::print_stdout, clippy::print_stderr, reason = "a command-line tool reports on its terminal")]
+
+mod info;
+mod sample;
+mod ui;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Reach for the Arcs: meshes from signed distance samples.
+#[derive(Debug, Parser)]
+#[command(name = "rfta", version, about, long_about = None)]
+struct Cli {
+    /// Print nothing but errors (no progress bars, no summaries).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Print timings and details.
+    #[arg(short, long, global = true)]
+    verbose: bool,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Sample the exact signed distance of a mesh (negative inside) on a regular grid.
+    Sample(sample::Args),
+    /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
+    Info {
+        /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .ply .csv .xyz SDF samples).
+        file: PathBuf,
+        /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
+        #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = ui::parse_bounds)]
+        bounds: Option<rfta_io::GridBounds>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let ui = ui::Ui::new(cli.quiet, cli.verbose);
+    if let Some(n) = cli.threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
+            eprintln!("error: cannot start {n} threads: {e}");
+            return ExitCode::from(1);
+        }
+    }
+    let result = match cli.command {
+        Command::Sample(args) => sample::run(args, &ui),
+        Command::Info { file, bounds } => info::run(&file, bounds, &ui),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the context chain joined, outermost first, without repeating a cause
+            // that an outer message already quotes.
+            let mut msg = String::new();
+            for cause in e.chain().map(|c| c.to_string()) {
+                if !msg.contains(&cause) {
+                    msg += if msg.is_empty() { "" } else { ": " };
+                    msg += &cause;
+                }
+            }
+            eprintln!("error: {msg}");
+            ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,66 @@
+//! Terminal output: verbosity, progress bars, argument parsers shared by subcommands.
+
+use std::time::Duration;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rfta_geom::glam::DVec3;
+use rfta_io::GridBounds;
+
+/// How much to print.
+pub(crate) struct Ui {
+    quiet: bool,
+    verbose: bool,
+}
+
+impl Ui {
+    pub(crate) fn new(quiet: bool, verbose: bool) -> Self {
+        Self { quiet, verbose }
+    }
+
+    /// A summary line (suppressed by `-q`).
+    pub(crate) fn say(&self, msg: impl AsRef<str>) {
+        if !self.quiet {
+            eprintln!("{}", msg.as_ref());
+        }
+    }
+
+    /// A detail line (only with `-v`).
+    pub(crate) fn detail(&self, msg: impl AsRef<str>) {
+        if self.verbose {
+            eprintln!("{}", msg.as_ref());
+        }
+    }
+
+    /// A progress bar over `len` steps (hidden with `-q` or when stderr is not a terminal).
+    pub(crate) fn progress(&self, len: u64, what: &str) -> ProgressBar {
+        if self.quiet {
+            return ProgressBar::hidden();
+        }
+        let bar = ProgressBar::new(len);
+        let style = ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> ");
+        bar.set_style(style);
+        bar.set_message(what.to_string());
+        bar.enable_steady_tick(Duration::from_millis(200));
+        bar
+    }
+}
+
+/// Parses `xmin,ymin,zmin,xmax,ymax,zmax` (or `lo,hi` for a cube).
+pub(crate) fn parse_bounds(s: &str) -> Result<GridBounds, String> {
+    let v: Result<Vec<f64>, _> = s.split(',').map(|t| t.trim().parse::<f64>()).collect();
+    let v = v.map_err(|_| format!("'{s}' is not a list of numbers"))?;
+    let (min, max) = match v.as_slice() {
+        [lo, hi] => (DVec3::splat(*lo), DVec3::splat(*hi)),
+        [a, b, c, d, e, f] => (DVec3::new(*a, *b, *c), DVec3::new(*d, *e, *f)),
+        _ => return Err(format!("expected 2 or 6 numbers, found {}", v.len())),
+    };
+    if !(min.is_finite() && max.is_finite()) {
+        return Err("bounds must be finite".into());
+    }
+    if min.cmpge(max).any() {
+        return Err(format!("bounds are inverted or of zero size: min {min} must be below max {max} on every axis"));
+    }
+    Ok(GridBounds { min, max })
+}
