@@ -1,1 +1,4 @@
-//! x
+//! End-to-end tests: one binary, one module per area.
+
+/// Mesh loading, topology and exact SDF sampling against the prepared inputs.
+mod data_inputs;

@@ -1,1 +1,99 @@
-//! x
+//! Project automation, run as `cargo xtask <command>`:
+//!
+//! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, shaders, tidy.
+//! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
+//! - `tidy`: repository rules (see [`tidy`]).
+
+#![expect(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "a command-line tool reports on its terminal"
+)]
+
+mod shaders;
+mod tidy;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{Context, Result, bail};
+
+const HELP: &str = "\
+cargo xtask <command>
+
+commands:
+  ci        fmt --check, clippy -D warnings, tests, docs -D warnings, shaders, tidy
+  shaders   validate every shaders/*.wgsl with naga
+  tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
+";
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let root = workspace_root();
+    match args.first().map(String::as_str) {
+        Some("ci") => ci(&root),
+        Some("shaders") => shaders::run(&root),
+        Some("tidy") => tidy::run(&root),
+        Some("help" | "--help" | "-h") | None => {
+            print!("{HELP}");
+            Ok(())
+        }
+        Some(other) => bail!("unknown command '{other}'\n\n{HELP}"),
+    }
+}
+
+/// The repository root (the parent of this crate's directory).
+pub(crate) fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+fn ci(root: &Path) -> Result<()> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    type Step = (
+        &'static str,
+        &'static [&'static str],
+        &'static [(&'static str, &'static str)],
+    );
+    let steps: [Step; 4] = [
+        ("fmt", &["fmt", "--all", "--check"], &[]),
+        (
+            "clippy",
+            &[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ],
+            &[],
+        ),
+        ("test", &["test", "--workspace"], &[]),
+        (
+            "doc",
+            &["doc", "--workspace", "--no-deps"],
+            &[("RUSTDOCFLAGS", "-D warnings")],
+        ),
+    ];
+    for (name, args, env) in steps {
+        println!("==> {name}: cargo {}", args.join(" "));
+        let status = Command::new(&cargo)
+            .args(args)
+            .envs(env.iter().copied())
+            .current_dir(root)
+            .status()
+            .with_context(|| format!("cannot run cargo for step '{name}'"))?;
+        if !status.success() {
+            bail!("step '{name}' failed ({status})");
+        }
+    }
+    println!("==> shaders");
+    shaders::run(root)?;
+    println!("==> tidy");
+    tidy::run(root)?;
+    println!("==> ci passed");
+    Ok(())
+}

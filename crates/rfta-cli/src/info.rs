@@ -11,10 +11,16 @@ use crate::sample::fmt_vec;
 use crate::ui::Ui;
 
 pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
     match ext.as_str() {
         "obj" | "off" | "stl" | "glb" => describe_mesh(path, &rfta_io::read_mesh(path)?),
-        "npy" | "exr" | "csv" | "xyz" | "txt" => describe_sdf(path, rfta_io::read_sdf(path, bounds)?),
+        "npy" | "exr" | "csv" | "xyz" | "txt" => {
+            describe_sdf(path, rfta_io::read_sdf(path, bounds)?)
+        }
         "ply" => {
             // A PLY holds a mesh (faces), SDF samples (a scalar) or oriented points (normals).
             if let Ok(mesh) = rfta_io::read_mesh(path)
@@ -32,7 +38,10 @@ pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<(
             println!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
             Ok(())
         }
-        _ => bail!("{}: unknown file type (expected a mesh or SDF samples)", path.display()),
+        _ => bail!(
+            "{}: unknown file type (expected a mesh or SDF samples)",
+            path.display()
+        ),
     }
 }
 
@@ -41,15 +50,32 @@ fn describe_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
     let b = mesh.bounds();
     let yes = |x: bool| if x { "yes" } else { "no" };
     println!("{}: triangle mesh", path.display());
-    println!("  vertices    {} ({} used)", mesh.n_vertices(), t.n_vertices);
+    println!(
+        "  vertices    {} ({} used)",
+        mesh.n_vertices(),
+        t.n_vertices
+    );
     println!("  faces       {}", mesh.n_faces());
     println!("  edges       {}", t.n_edges);
     println!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
     println!("  area        {:.6}", mesh.area());
     println!("  volume      {:.6}", mesh.signed_volume());
-    println!("  watertight  {} ({} boundary edges, {} non-manifold edges)", yes(t.is_watertight()), t.boundary_edges, t.nonmanifold_edges);
-    println!("  manifold    {} ({} non-manifold vertices)", yes(t.is_manifold()), t.nonmanifold_vertices);
-    println!("  oriented    {} ({} misoriented edges)", yes(t.is_consistently_oriented()), t.misoriented_edges);
+    println!(
+        "  watertight  {} ({} boundary edges, {} non-manifold edges)",
+        yes(t.is_watertight()),
+        t.boundary_edges,
+        t.nonmanifold_edges
+    );
+    println!(
+        "  manifold    {} ({} non-manifold vertices)",
+        yes(t.is_manifold()),
+        t.nonmanifold_vertices
+    );
+    println!(
+        "  oriented    {} ({} misoriented edges)",
+        yes(t.is_consistently_oriented()),
+        t.misoriented_edges
+    );
     println!("  components  {}", t.components);
     println!("  euler       {}", t.euler_characteristic());
     match t.genus() {
@@ -68,8 +94,17 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
     match &raw.layout {
         Layout::Grid(g) => {
             let b = g.bounds();
-            println!("  grid        {:?} points, spacing {}", g.dims(), fmt_vec(g.spacing()));
-            println!("  bounds      {} .. {} (from {})", fmt_vec(b.min), fmt_vec(b.max), raw.bounds_source);
+            println!(
+                "  grid        {:?} points, spacing {}",
+                g.dims(),
+                fmt_vec(g.spacing())
+            );
+            println!(
+                "  bounds      {} .. {} (from {})",
+                fmt_vec(b.min),
+                fmt_vec(b.max),
+                raw.bounds_source
+            );
         }
         Layout::Scattered(p) => {
             let b = rfta_geom::Aabb::from_points(p);
@@ -77,10 +112,15 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
         }
     }
     let finite = raw.values.iter().copied().filter(|v| v.is_finite());
-    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
     println!("  values      {lo:.6} .. {hi:.6}");
     let s = SignBalance::of(&raw.values);
-    println!("  signs       {} inside (< 0), {} zero, {} outside (> 0), {} not finite", s.negative, s.zero, s.positive, s.non_finite);
+    println!(
+        "  signs       {} inside (< 0), {} zero, {} outside (> 0), {} not finite",
+        s.negative, s.zero, s.positive, s.non_finite
+    );
     match raw.validate(path) {
         Ok(_) => println!("  valid       yes"),
         Err(e) => println!("  valid       no: {e}"),

@@ -3,7 +3,11 @@
 //! Exit status: 0 on success, 1 when the work failed (the message says which file and why),
 //! 2 for invalid command-line usage.
 
-#![expect(clippy::print_stdout, clippy::print_stderr, reason = "a command-line tool reports on its terminal")]
+#![expect(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    reason = "a command-line tool reports on its terminal"
+)]
 
 mod info;
 mod sample;
@@ -48,11 +52,13 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let ui = ui::Ui::new(cli.quiet, cli.verbose);
-    if let Some(n) = cli.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
-            eprintln!("error: cannot start {n} threads: {e}");
-            return ExitCode::from(1);
-        }
+    if let Some(n) = cli.threads
+        && let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+    {
+        eprintln!("error: cannot start {n} threads: {e}");
+        return ExitCode::from(1);
     }
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),

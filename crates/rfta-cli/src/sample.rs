@@ -74,23 +74,36 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         ));
     }
     let bounds = args.bounds.unwrap_or_default();
-    let grid = Grid::from_bounds([args.res + 1; 3], bounds.min, bounds.max).context("invalid grid")?;
+    let grid =
+        Grid::from_bounds([args.res + 1; 3], bounds.min, bounds.max).context("invalid grid")?;
     let n = grid.len();
     // Refuse grids that cannot fit in memory before allocating (8 bytes per value, 24 per position).
     let bytes = n.checked_mul(32).context("grid too large")?;
     if bytes > 16 << 30 {
-        bail!("a {}^3 grid needs about {:.1} GiB; choose a smaller --res", args.res + 1, bytes as f64 / (1u64 << 30) as f64);
+        bail!(
+            "a {}^3 grid needs about {:.1} GiB; choose a smaller --res",
+            args.res + 1,
+            bytes as f64 / (1u64 << 30) as f64
+        );
     }
     let t0 = Instant::now();
-    let index = MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
-    ui.detail(format!("index over {} triangles built in {:.3} s", mesh.n_faces(), t0.elapsed().as_secs_f64()));
+    let index =
+        MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
+    ui.detail(format!(
+        "index over {} triangles built in {:.3} s",
+        mesh.n_faces(),
+        t0.elapsed().as_secs_f64()
+    ));
 
     let t1 = Instant::now();
     let bar = ui.progress(grid.dims()[0] as u64, "sampling");
     let values = index.signed_distance_grid(&grid, &|| bar.inc(1));
     bar.finish_and_clear();
     let n_inside = values.iter().filter(|v| **v < 0.0).count();
-    ui.detail(format!("sampled {n} points in {:.3} s", t1.elapsed().as_secs_f64()));
+    ui.detail(format!(
+        "sampled {n} points in {:.3} s",
+        t1.elapsed().as_secs_f64()
+    ));
     rfta_io::write_sdf_grid(&args.output, &grid, &values)?;
     ui.say(format!(
         "wrote {} ({}^3 samples over [{}, {}], {} inside, {} outside)",

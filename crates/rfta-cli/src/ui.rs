@@ -60,7 +60,9 @@ pub(crate) fn parse_bounds(s: &str) -> Result<GridBounds, String> {
         return Err("bounds must be finite".into());
     }
     if min.cmpge(max).any() {
-        return Err(format!("bounds are inverted or of zero size: min {min} must be below max {max} on every axis"));
+        return Err(format!(
+            "bounds are inverted or of zero size: min {min} must be below max {max} on every axis"
+        ));
     }
     Ok(GridBounds { min, max })
 }

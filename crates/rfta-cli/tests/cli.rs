@@ -6,7 +6,10 @@ use std::process::{Command, Output};
 use rfta_io::read_sdf;
 
 fn rfta(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rfta")).args(args).output().expect("run rfta")
+    Command::new(env!("CARGO_BIN_EXE_rfta"))
+        .args(args)
+        .output()
+        .expect("run rfta")
 }
 
 fn stderr(o: &Output) -> String {
@@ -28,21 +31,38 @@ fn s(p: &Path) -> &str {
 /// winding-number sign) to 1e-9 absolute, sign included, for every prepared input.
 #[test]
 fn sample_matches_reference_grids() {
-    let Some(data) = rfta_testkit::data_dir_or_skip("sample_matches_reference_grids") else { return };
+    let Some(data) = rfta_testkit::data_dir_or_skip("sample_matches_reference_grids") else {
+        return;
+    };
     let names = rfta_testkit::input_names(&data);
-    assert!(names.len() >= 8, "expected the 8 prepared inputs, found {names:?}");
+    assert!(
+        names.len() >= 8,
+        "expected the 8 prepared inputs, found {names:?}"
+    );
     let dir = temp("reference");
     for name in names {
         let input = data.join("inputs").join(&name);
         let out = dir.join(format!("{name}.npy"));
-        let o = rfta(&["-q", "sample", s(&input.join("gt.obj")), "--res", "20", "-o", s(&out)]);
+        let o = rfta(&[
+            "-q",
+            "sample",
+            s(&input.join("gt.obj")),
+            "--res",
+            "20",
+            "-o",
+            s(&out),
+        ]);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
         let ours = read_sdf(&out, None).expect("our grid");
         let reference = read_sdf(&input.join("sdf_n20.npy"), None).expect("reference grid");
         assert_eq!(ours.layout, reference.layout, "{name}: grid layout");
         let mut worst: f64 = 0.0;
         for (i, (a, b)) in ours.values.iter().zip(&reference.values).enumerate() {
-            assert_eq!(a.signum(), b.signum(), "{name}: sign differs at sample {i}: {a} vs {b}");
+            assert_eq!(
+                a.signum(),
+                b.signum(),
+                "{name}: sign differs at sample {i}: {a} vs {b}"
+            );
             worst = worst.max((a - b).abs());
         }
         assert!(worst <= 1e-9, "{name}: max deviation {worst}");
@@ -55,18 +75,37 @@ fn builtin_example_and_info() {
     let dir = temp("builtin");
     let npy = dir.join("torus.npy");
     let obj = dir.join("torus.obj");
-    let o = rfta(&["sample", "--shape", "torus", "--res", "12", "-o", s(&npy), "--save-mesh", s(&obj)]);
+    let o = rfta(&[
+        "sample",
+        "--shape",
+        "torus",
+        "--res",
+        "12",
+        "-o",
+        s(&npy),
+        "--save-mesh",
+        s(&obj),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let info = rfta(&["info", s(&obj)]);
     let text = String::from_utf8_lossy(&info.stdout);
-    assert!(text.contains("genus       1") && text.contains("watertight  yes"), "{text}");
+    assert!(
+        text.contains("genus       1") && text.contains("watertight  yes"),
+        "{text}"
+    );
     let info = rfta(&["info", s(&npy)]);
     let text = String::from_utf8_lossy(&info.stdout);
-    assert!(text.contains("[13, 13, 13] points") && text.contains("valid       yes"), "{text}");
+    assert!(
+        text.contains("[13, 13, 13] points") && text.contains("valid       yes"),
+        "{text}"
+    );
     // Values agree with the analytic torus up to the tessellation's sagitta (256 x 128 segments):
     // at most 0.85 * (1 - cos(pi/256)) + 0.25 * (1 - cos(pi/128)) = 1.39e-4 (outer ring radius 0.85).
     let raw = read_sdf(&npy, None).expect("grid");
-    let torus = rfta_testkit::Analytic::Torus { major: 0.6, minor: 0.25 };
+    let torus = rfta_testkit::Analytic::Torus {
+        major: 0.6,
+        minor: 0.25,
+    };
     let grid = match raw.layout {
         rfta_geom::Layout::Grid(g) => g,
         other => panic!("expected a grid, got {other:?}"),
@@ -84,18 +123,74 @@ fn errors_are_one_clear_line_with_nonzero_status() {
     let bad = dir.join("bad.obj");
     std::fs::write(&bad, "v 0 0 0\nf 1 2 3\n").expect("write");
     let cases: Vec<(Vec<String>, i32, &str)> = vec![
-        (vec!["info".into(), s(&dir.join("missing.npy")).into()], 1, "missing.npy: No such file"),
-        (vec!["sample".into(), s(&bad).into(), "--res".into(), "4".into(), "-o".into(), "x.npy".into()], 1, "bad.obj: face 0 refers to vertex 1"),
-        (vec!["sample".into(), "--shape".into(), "box".into(), "--res".into(), "0".into(), "-o".into(), "x.npy".into()], 1, "--res must be at least 1"),
-        (vec!["sample".into(), "--shape".into(), "box".into(), "--res".into(), "4".into(), "-o".into(), s(&dir.join("x.vtk")).into()], 1, "x.vtk: unsupported file type"),
-        (vec!["sample".into(), "--shape".into(), "box".into(), "--res".into(), "4".into(), "--bounds".into(), "1,0".into(), "-o".into(), "x.npy".into()], 2, "inverted"),
+        (
+            vec!["info".into(), s(&dir.join("missing.npy")).into()],
+            1,
+            "missing.npy: No such file",
+        ),
+        (
+            vec![
+                "sample".into(),
+                s(&bad).into(),
+                "--res".into(),
+                "4".into(),
+                "-o".into(),
+                "x.npy".into(),
+            ],
+            1,
+            "bad.obj: face 0 refers to vertex 1",
+        ),
+        (
+            vec![
+                "sample".into(),
+                "--shape".into(),
+                "box".into(),
+                "--res".into(),
+                "0".into(),
+                "-o".into(),
+                "x.npy".into(),
+            ],
+            1,
+            "--res must be at least 1",
+        ),
+        (
+            vec![
+                "sample".into(),
+                "--shape".into(),
+                "box".into(),
+                "--res".into(),
+                "4".into(),
+                "-o".into(),
+                s(&dir.join("x.vtk")).into(),
+            ],
+            1,
+            "x.vtk: unsupported file type",
+        ),
+        (
+            vec![
+                "sample".into(),
+                "--shape".into(),
+                "box".into(),
+                "--res".into(),
+                "4".into(),
+                "--bounds".into(),
+                "1,0".into(),
+                "-o".into(),
+                "x.npy".into(),
+            ],
+            2,
+            "inverted",
+        ),
     ];
     for (args, code, needle) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let o = rfta(&args);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
-        assert!(err.contains(needle), "{args:?}: '{err}' should contain '{needle}'");
+        assert!(
+            err.contains(needle),
+            "{args:?}: '{err}' should contain '{needle}'"
+        );
         if code == 1 {
             assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
         }

@@ -177,7 +177,7 @@ pub fn transport_on_sphere(sphere: &Sphere, from: DVec3, to: DVec3, arc_length: 
     let cos = u.dot(w);
     let total = sin.atan2(cos);
     let theta = (arc_length.max(0.0) / sphere.radius).min(total);
-    if !(theta > 0.0) {
+    if theta.is_nan() || theta <= 0.0 {
         return start;
     }
     let axis = if sin > 1e-300 {

@@ -127,7 +127,7 @@ pub(crate) fn parse(bytes: &[u8]) -> ParseResult<TriMesh> {
                 Some(ix) => ix.into_u32().collect(),
                 None => (0..n).collect(),
             };
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 return Err(ParseError::new(format!(
                     "{} indices do not form whole triangles",
                     indices.len()

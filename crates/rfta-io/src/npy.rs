@@ -256,7 +256,7 @@ mod tests {
         assert_eq!(b.data, a.data);
         // 3-D Fortran order: element (i, j, k) of shape (2, 3, 4) at i + 2 j + 6 k.
         let shape = [2usize, 3, 4];
-        let mut f = vec![0.0; 24];
+        let mut f = [0.0; 24];
         for i in 0..2 {
             for j in 0..3 {
                 for k in 0..4 {
@@ -267,8 +267,9 @@ mod tests {
         let payload: Vec<u8> = f.iter().flat_map(|v| v.to_le_bytes()).collect();
         let c = parse(&npy_bytes("<f8", true, "(2, 3, 4)", &payload)).expect("valid");
         assert_eq!(c.shape, shape);
-        assert_eq!(c.data[(1 * 3 + 2) * 4 + 3], 123.0);
-        assert_eq!(c.data[(0 * 3 + 1) * 4 + 2], 12.0);
+        let c_index = |i: usize, j: usize, k: usize| (i * 3 + j) * 4 + k;
+        assert_eq!(c.data[c_index(1, 2, 3)], 123.0);
+        assert_eq!(c.data[c_index(0, 1, 2)], 12.0);
     }
 
     #[test]

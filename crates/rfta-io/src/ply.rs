@@ -295,7 +295,7 @@ fn read_binary(body: &[u8], elements: &mut [Element], enc: Encoding) -> ParseRes
                 };
                 if let Some((count_ty, item_ty)) = p.list {
                     let n = read_num(body, &mut pos, count_ty, enc).ok_or_else(truncated)?;
-                    if !(n >= 0.0) {
+                    if n.is_nan() || n < 0.0 {
                         return Err(ParseError::new(format!(
                             "negative list length in element '{}' record {r}",
                             el.name

@@ -261,7 +261,9 @@ impl MeshIndex {
         let slabs: Vec<Vec<f64>> = (0..nx)
             .into_par_iter()
             .map(|i| {
-                let slab = (0..ny * nz).map(|jk| self.signed_distance(grid.position(i * ny * nz + jk))).collect();
+                let slab = (0..ny * nz)
+                    .map(|jk| self.signed_distance(grid.position(i * ny * nz + jk)))
+                    .collect();
                 on_slab();
                 slab
             })

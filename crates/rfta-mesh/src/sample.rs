@@ -24,7 +24,7 @@ pub fn sample_surface(mesh: &TriMesh, n: usize, seed: u64) -> Vec<SurfaceSample>
         total += if a.is_finite() { a } else { 0.0 };
         cdf.push(total);
     }
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Vec::new();
     }
     let mut rng = Rng::new(seed);

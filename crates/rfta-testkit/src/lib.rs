@@ -22,7 +22,9 @@ pub fn data_dir() -> Option<PathBuf> {
         return Some(PathBuf::from(dir)).filter(|p| p.is_dir());
     }
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    here.ancestors().flat_map(|a| [a.join("shared/data"), a.join("../shared/data")]).find(|p| p.join("inputs").is_dir())
+    here.ancestors()
+        .flat_map(|a| [a.join("shared/data"), a.join("../shared/data")])
+        .find(|p| p.join("inputs").is_dir())
 }
 
 /// The data directory, or: under CI a panic (data must be there), locally `None` after printing why
@@ -31,7 +33,9 @@ pub fn data_dir_or_skip(test: &str) -> Option<PathBuf> {
     match data_dir() {
         Some(d) => Some(d),
         None if std::env::var_os("CI").is_some() => {
-            panic!("{test}: shared data not found (set RFTA_DATA_DIR or place it at ../shared/data); required under CI")
+            panic!(
+                "{test}: shared data not found (set RFTA_DATA_DIR or place it at ../shared/data); required under CI"
+            )
         }
         None => {
             #[expect(clippy::print_stderr, reason = "a skipped test must say so")]
