@@ -84,9 +84,40 @@ impl Aabb {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 
+    /// The smallest `f32` box that holds this box: corners rounded outwards, for `f32`
+    /// structures (GPU buffers, obvhs) that must stay conservative.
+    pub fn to_f32_outward(&self) -> (glam::Vec3, glam::Vec3) {
+        let down = |x: f64| {
+            let f = x as f32;
+            if (f as f64) > x { f.next_down() } else { f }
+        };
+        let up = |x: f64| {
+            let f = x as f32;
+            if (f as f64) < x { f.next_up() } else { f }
+        };
+        (
+            glam::Vec3::new(down(self.min.x), down(self.min.y), down(self.min.z)),
+            glam::Vec3::new(up(self.max.x), up(self.max.y), up(self.max.z)),
+        )
+    }
+
     /// Squared distance from `p` to the box (zero inside).
     pub fn distance_squared(&self, p: DVec3) -> f64 {
         let d = (self.min - p).max(p - self.max).max(DVec3::ZERO);
         d.length_squared()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn f32_boxes_hold_their_f64_boxes() {
+        for (lo, hi) in [(0.1, 0.7), (-1e-9, 1e-9), (-3.3, -1.1), (1e20, 1.000001e20), (0.0, 0.0)] {
+            let b = Aabb::new(DVec3::splat(lo), DVec3::splat(hi));
+            let (flo, fhi) = b.to_f32_outward();
+            assert!((flo.x as f64) <= lo && (fhi.x as f64) >= hi, "{lo} {hi} -> {flo} {fhi}");
+        }
     }
 }

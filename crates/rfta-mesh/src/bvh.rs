@@ -59,20 +59,10 @@ impl obvhs::Boundable for TriBox {
     }
 }
 
-/// The `f32` box conservatively holding the `f64` box (rounded outwards).
-fn outward_f32(b: &Aabb) -> ObAabb {
-    let down = |x: f64| {
-        let f = x as f32;
-        if (f as f64) > x { f.next_down() } else { f }
-    };
-    let up = |x: f64| {
-        let f = x as f32;
-        if (f as f64) < x { f.next_up() } else { f }
-    };
-    ObAabb::new(
-        Vec3A::new(down(b.min.x), down(b.min.y), down(b.min.z)),
-        Vec3A::new(up(b.max.x), up(b.max.y), up(b.max.z)),
-    )
+/// The obvhs box holding an `f64` box.
+fn to_obvhs(b: &Aabb) -> ObAabb {
+    let (lo, hi) = b.to_f32_outward();
+    ObAabb::new(Vec3A::from(lo), Vec3A::from(hi))
 }
 
 impl MeshIndex {
@@ -89,7 +79,7 @@ impl MeshIndex {
         let corners: Vec<[DVec3; 3]> = (0..mesh.n_faces()).map(|f| mesh.triangle(f)).collect();
         let boxes: Vec<TriBox> = corners
             .iter()
-            .map(|t| TriBox(outward_f32(&Aabb::from_points(t.iter()))))
+            .map(|t| TriBox(to_obvhs(&Aabb::from_points(t.iter()))))
             .collect();
         let ob = build_bvh2(
             &boxes,

@@ -1,0 +1,185 @@
+//! Occupancy on the GPU with wgpu compute.
+
+use std::sync::OnceLock;
+
+use wgpu::util::DeviceExt;
+
+use crate::band::BitGrid;
+use crate::lattice::{QSphere, seed32};
+use crate::{Error, RasterParams, shaders};
+
+/// Words of sphere data per sphere in the GPU buffer.
+const SPHERE_WORDS: usize = 10;
+/// Invocations per workgroup (the shader's `workgroup_size`).
+const WORKGROUP: u32 = 64;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    res: u32,
+    words_per_column: u32,
+    seed: u32,
+    n_spheres: u32,
+    sphere_offset: u32,
+    pad: [u32; 3],
+}
+
+/// A wgpu device with the rasterization pipeline compiled.
+#[derive(Debug)]
+pub struct GpuRasterizer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    adapter_info: wgpu::AdapterInfo,
+}
+
+impl GpuRasterizer {
+    /// The process-wide rasterizer, created on first use; `None` when no adapter exists.
+    /// `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` select the adapter.
+    pub fn shared() -> Option<&'static GpuRasterizer> {
+        static SHARED: OnceLock<Option<GpuRasterizer>> = OnceLock::new();
+        SHARED.get_or_init(|| pollster::block_on(Self::new())).as_ref()
+    }
+
+    /// A new rasterizer on the default adapter; `None` when none can be opened.
+    pub async fn new() -> Option<Self> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = wgpu::util::initialize_adapter_from_env_or_default(&instance, None).await.ok()?;
+        let desc = wgpu::DeviceDescriptor { required_limits: adapter.limits(), ..Default::default() };
+        let (device, queue) = adapter.request_device(&desc).await.ok()?;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster_spheres.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(shaders::RASTER_SPHERES.into()),
+        });
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raster_spheres"),
+            entries: &[
+                entry(0, wgpu::BufferBindingType::Uniform),
+                entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+                entry(2, wgpu::BufferBindingType::Storage { read_only: false }),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("raster_spheres"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("raster_spheres.wgsl"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("raster_spheres"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Some(Self { device, queue, pipeline, layout, adapter_info: adapter.get_info() })
+    }
+
+    /// The adapter's name and backend, for logs and test output.
+    pub fn describe(&self) -> String {
+        format!("{} ({:?}, {:?})", self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type)
+    }
+
+    /// Occupancy of the lattice spheres; `None` when the buffers exceed the device's limits.
+    pub(crate) fn occupancy(&self, spheres: &[QSphere], params: &RasterParams) -> Result<Option<BitGrid>, Error> {
+        let res = params.res;
+        let words_per_column64 = res.div_ceil(64);
+        let n_words64 = res * res * words_per_column64;
+        let occ_bytes = (n_words64 * 8) as u64;
+        let sphere_bytes = (spheres.len().max(1) * SPHERE_WORDS * 4) as u64;
+        let limits = self.device.limits();
+        let binding_limit = limits.max_storage_buffer_binding_size as u64;
+        if occ_bytes > binding_limit.min(limits.max_buffer_size) || sphere_bytes > binding_limit.min(limits.max_buffer_size) {
+            return Ok(None);
+        }
+        let mut data: Vec<u32> = Vec::with_capacity(spheres.len().max(1) * SPHERE_WORDS);
+        for s in spheres {
+            data.extend(s.c.map(|v| v as u32));
+            data.push(s.r2);
+            data.extend(s.lo);
+            data.extend(s.hi);
+        }
+        if data.is_empty() {
+            data.resize(SPHERE_WORDS, 0);
+        }
+        let sphere_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("spheres"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let occ_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("occupancy"),
+            size: occ_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let read_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("occupancy readback"),
+            size: occ_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        // The widest candidate x range sets the dispatch's second dimension.
+        let max_x = spheres.iter().filter(|s| s.lo[0] <= s.hi[0]).map(|s| s.hi[0] - s.lo[0] + 1).max().unwrap_or(0);
+        let per_dispatch = limits.max_compute_workgroups_per_dimension.min(65_535) * WORKGROUP;
+        let mut offset = 0u32;
+        while (offset as usize) < spheres.len() && max_x > 0 {
+            let n = (spheres.len() as u32 - offset).min(per_dispatch);
+            let p = Params {
+                res: res as u32,
+                words_per_column: (2 * words_per_column64) as u32,
+                seed: seed32(params.seed),
+                n_spheres: spheres.len() as u32,
+                sphere_offset: offset,
+                pad: [0; 3],
+            };
+            let param_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("raster params"),
+                contents: bytemuck::bytes_of(&p),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("raster_spheres"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: param_buf.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: sphere_buf.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: occ_buf.as_entire_binding() },
+                ],
+            });
+            let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raster") });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raster"), timestamp_writes: None });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups(n.div_ceil(WORKGROUP), max_x, 1);
+            }
+            self.queue.submit([encoder.finish()]);
+            offset += n;
+        }
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        encoder.copy_buffer_to_buffer(&occ_buf, 0, &read_buf, 0, None);
+        self.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        read_buf.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+        rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+        let view = read_buf.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
+        let words: Vec<u64> = view
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]))
+            .collect();
+        drop(view);
+        read_buf.unmap();
+        Ok(Some(BitGrid::from_words(res, words)))
+    }
+}

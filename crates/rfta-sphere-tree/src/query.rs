@@ -1,0 +1,140 @@
+//! The queries: nearest-first traversals pruned by a signed-distance lower bound.
+
+use rfta_geom::glam::DVec3;
+
+use crate::build::{Node, SphereTree};
+
+/// Lower bound of `|x - p_j| - r_j` over the node's spheres.
+fn lower_bound(node: &Node, x: DVec3) -> f64 {
+    node.centers.distance_squared(x).sqrt() - node.max_radius
+}
+
+impl SphereTree {
+    /// Whether some sphere `j != ignore` has signed distance `|x - p_j| - r_j < threshold`.
+    ///
+    /// `threshold = -tol` asks "is `x` inside another sphere by more than `tol`" (the reference's
+    /// feasibility test, `tol = 1e-4` in unit-box coordinates).
+    pub fn inside_any(&self, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((0, lower_bound(&self.nodes[0], x)));
+        while let Some((idx, lb)) = stack.pop() {
+            if lb >= threshold {
+                continue;
+            }
+            let node = &self.nodes[idx as usize];
+            if node.leaf {
+                for s in node.a as usize..(node.a + node.b) as usize {
+                    if Some(self.ids[s]) != ignore && (x - self.centers[s]).length() - self.radii[s] < threshold {
+                        return true;
+                    }
+                }
+            } else {
+                push_ordered(&mut stack, &self.nodes, node, x);
+            }
+        }
+        false
+    }
+
+    /// Up to `k` spheres `j != ignore` with `|x - p_j| - r_j < threshold`, deepest first (ties by
+    /// index): the `k` smallest signed distances.
+    pub fn spheres_containing(&self, x: DVec3, k: usize, threshold: f64, ignore: Option<u32>) -> Vec<u32> {
+        let mut hits = Vec::new();
+        self.spheres_containing_into(x, k, threshold, ignore, &mut hits);
+        hits.into_iter().map(|(_, j)| j).collect()
+    }
+
+    /// [`SphereTree::spheres_containing`] into a reused buffer of `(signed distance, index)`,
+    /// sorted ascending; avoids allocating in hot loops.
+    pub fn spheres_containing_into(
+        &self,
+        x: DVec3,
+        k: usize,
+        threshold: f64,
+        ignore: Option<u32>,
+        hits: &mut Vec<(f64, u32)>,
+    ) {
+        hits.clear();
+        if self.nodes.is_empty() || k == 0 {
+            return;
+        }
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((0, lower_bound(&self.nodes[0], x)));
+        while let Some((idx, lb)) = stack.pop() {
+            // Once k hits are held, only spheres at least as deep as the k-th can still enter.
+            if lb >= threshold || (hits.len() == k && lb > hits[k - 1].0) {
+                continue;
+            }
+            let node = &self.nodes[idx as usize];
+            if node.leaf {
+                for s in node.a as usize..(node.a + node.b) as usize {
+                    let id = self.ids[s];
+                    if Some(id) == ignore {
+                        continue;
+                    }
+                    let d = (x - self.centers[s]).length() - self.radii[s];
+                    if d >= threshold {
+                        continue;
+                    }
+                    let key = (d, id);
+                    if hits.len() == k && !less(key, hits[k - 1]) {
+                        continue;
+                    }
+                    let at = hits.partition_point(|h| less(*h, key));
+                    hits.insert(at, key);
+                    hits.truncate(k);
+                }
+            } else {
+                push_ordered(&mut stack, &self.nodes, node, x);
+            }
+        }
+    }
+
+    /// [`SphereTree::inside_any`] with the reference implementation's traversal: descend into every
+    /// node whose box of spheres (padded by the threshold, when positive) holds `x`, left before
+    /// right, with no distance bound. Same answers; kept as the baseline for benchmarks.
+    pub fn inside_any_reference_order(&self, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let pad = threshold.max(0.0);
+        let mut stack: Vec<u32> = vec![0];
+        while let Some(idx) = stack.pop() {
+            let node = &self.nodes[idx as usize];
+            if !node.bounds.padded(pad).contains(x) {
+                continue;
+            }
+            if node.leaf {
+                for s in node.a as usize..(node.a + node.b) as usize {
+                    if Some(self.ids[s]) != ignore && (x - self.centers[s]).length() - self.radii[s] < threshold {
+                        return true;
+                    }
+                }
+            } else {
+                stack.push(node.b);
+                stack.push(node.a);
+            }
+        }
+        false
+    }
+}
+
+/// `(d, id)` ordering: by signed distance, then index.
+fn less(a: (f64, u32), b: (f64, u32)) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+}
+
+/// Pushes both children, the one with the smaller bound last so that it is visited first.
+fn push_ordered(stack: &mut Vec<(u32, f64)>, nodes: &[Node], node: &Node, x: DVec3) {
+    let (l, r) = (node.a, node.b);
+    let (lb_l, lb_r) = (lower_bound(&nodes[l as usize], x), lower_bound(&nodes[r as usize], x));
+    if lb_l <= lb_r {
+        stack.push((r, lb_r));
+        stack.push((l, lb_l));
+    } else {
+        stack.push((l, lb_l));
+        stack.push((r, lb_r));
+    }
+}
