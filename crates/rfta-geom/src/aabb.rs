@@ -114,10 +114,19 @@ mod tests {
 
     #[test]
     fn f32_boxes_hold_their_f64_boxes() {
-        for (lo, hi) in [(0.1, 0.7), (-1e-9, 1e-9), (-3.3, -1.1), (1e20, 1.000001e20), (0.0, 0.0)] {
+        for (lo, hi) in [
+            (0.1, 0.7),
+            (-1e-9, 1e-9),
+            (-3.3, -1.1),
+            (1e20, 1.000001e20),
+            (0.0, 0.0),
+        ] {
             let b = Aabb::new(DVec3::splat(lo), DVec3::splat(hi));
             let (flo, fhi) = b.to_f32_outward();
-            assert!((flo.x as f64) <= lo && (fhi.x as f64) >= hi, "{lo} {hi} -> {flo} {fhi}");
+            assert!(
+                (flo.x as f64) <= lo && (fhi.x as f64) >= hi,
+                "{lo} {hi} -> {flo} {fhi}"
+            );
         }
     }
 }

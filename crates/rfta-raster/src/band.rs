@@ -20,12 +20,20 @@ impl BitGrid {
     /// An empty grid of `res^3` cells.
     pub fn new(res: usize) -> Self {
         let words_per_column = res.div_ceil(64);
-        Self { res, words_per_column, words: vec![0; res * res * words_per_column] }
+        Self {
+            res,
+            words_per_column,
+            words: vec![0; res * res * words_per_column],
+        }
     }
 
     /// A grid from its 64-bit words (as [`BitGrid::words`] returns them).
     pub(crate) fn from_words(res: usize, words: Vec<u64>) -> Self {
-        Self { res, words_per_column: res.div_ceil(64), words }
+        Self {
+            res,
+            words_per_column: res.div_ceil(64),
+            words,
+        }
     }
 
     /// Cells per axis.
@@ -61,7 +69,11 @@ impl BitGrid {
 
     /// The jittered sample point of every empty cell that has an occupied cell among its 26
     /// neighbours, within the inclusive cell box `bbox`, in grid order.
-    pub(crate) fn narrow_band_points(&self, bbox: ([u32; 3], [u32; 3]), params: &RasterParams) -> Vec<DVec3> {
+    pub(crate) fn narrow_band_points(
+        &self,
+        bbox: ([u32; 3], [u32; 3]),
+        params: &RasterParams,
+    ) -> Vec<DVec3> {
         let (lo, hi) = bbox;
         if (0..3).any(|a| lo[a] > hi[a]) || self.res == 0 {
             return Vec::new();
@@ -116,6 +128,10 @@ pub(crate) fn word_mask(w: usize, lo: usize, hi: usize) -> u64 {
     }
     let from = lo.max(a) - a;
     let to = hi.min(b) - a;
-    let upper = if to == 63 { u64::MAX } else { (1u64 << (to + 1)) - 1 };
+    let upper = if to == 63 {
+        u64::MAX
+    } else {
+        (1u64 << (to + 1)) - 1
+    };
     upper & !((1u64 << from) - 1)
 }

@@ -1,6 +1,6 @@
 //! Occupancy on the GPU with wgpu compute.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use wgpu::util::DeviceExt;
 
@@ -32,6 +32,8 @@ pub struct GpuRasterizer {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     adapter_info: wgpu::AdapterInfo,
+    /// Errors wgpu reported asynchronously (its default handler would panic).
+    errors: Arc<Mutex<Vec<String>>>,
 }
 
 impl GpuRasterizer {
@@ -39,15 +41,30 @@ impl GpuRasterizer {
     /// `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` select the adapter.
     pub fn shared() -> Option<&'static GpuRasterizer> {
         static SHARED: OnceLock<Option<GpuRasterizer>> = OnceLock::new();
-        SHARED.get_or_init(|| pollster::block_on(Self::new())).as_ref()
+        SHARED
+            .get_or_init(|| pollster::block_on(Self::new()))
+            .as_ref()
     }
 
     /// A new rasterizer on the default adapter; `None` when none can be opened.
     pub async fn new() -> Option<Self> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = wgpu::util::initialize_adapter_from_env_or_default(&instance, None).await.ok()?;
-        let desc = wgpu::DeviceDescriptor { required_limits: adapter.limits(), ..Default::default() };
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = wgpu::util::initialize_adapter_from_env_or_default(&instance, None)
+            .await
+            .ok()?;
+        let desc = wgpu::DeviceDescriptor {
+            required_limits: adapter.limits(),
+            ..Default::default()
+        };
         let (device, queue) = adapter.request_device(&desc).await.ok()?;
+        let errors: Arc<Mutex<Vec<String>>> = Arc::default();
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster_spheres.wgsl"),
             source: wgpu::ShaderSource::Wgsl(shaders::RASTER_SPHERES.into()),
@@ -55,7 +72,11 @@ impl GpuRasterizer {
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            ty: wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
             count: None,
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -79,16 +100,51 @@ impl GpuRasterizer {
             compilation_options: Default::default(),
             cache: None,
         });
-        Some(Self { device, queue, pipeline, layout, adapter_info: adapter.get_info() })
+        let gpu = Self {
+            device,
+            queue,
+            pipeline,
+            layout,
+            adapter_info: adapter.get_info(),
+            errors,
+        };
+        if let Err(e) = gpu.take_errors() {
+            log::warn!(
+                "the GPU rasterizer could not be set up on {}: {e}",
+                gpu.describe()
+            );
+            return None;
+        }
+        Some(gpu)
+    }
+
+    /// The errors wgpu reported since the last call, as one error.
+    fn take_errors(&self) -> Result<(), Error> {
+        let mut v = self
+            .errors
+            .lock()
+            .map_err(|_| Error::Gpu("error log poisoned".into()))?;
+        if v.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::Gpu(std::mem::take(&mut *v).join("; ")))
+        }
     }
 
     /// The adapter's name and backend, for logs and test output.
     pub fn describe(&self) -> String {
-        format!("{} ({:?}, {:?})", self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type)
+        format!(
+            "{} ({:?}, {:?})",
+            self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type
+        )
     }
 
     /// Occupancy of the lattice spheres; `None` when the buffers exceed the device's limits.
-    pub(crate) fn occupancy(&self, spheres: &[QSphere], params: &RasterParams) -> Result<Option<BitGrid>, Error> {
+    pub(crate) fn occupancy(
+        &self,
+        spheres: &[QSphere],
+        params: &RasterParams,
+    ) -> Result<Option<BitGrid>, Error> {
         let res = params.res;
         let words_per_column64 = res.div_ceil(64);
         let n_words64 = res * res * words_per_column64;
@@ -96,7 +152,9 @@ impl GpuRasterizer {
         let sphere_bytes = (spheres.len().max(1) * SPHERE_WORDS * 4) as u64;
         let limits = self.device.limits();
         let binding_limit = limits.max_storage_buffer_binding_size as u64;
-        if occ_bytes > binding_limit.min(limits.max_buffer_size) || sphere_bytes > binding_limit.min(limits.max_buffer_size) {
+        if occ_bytes > binding_limit.min(limits.max_buffer_size)
+            || sphere_bytes > binding_limit.min(limits.max_buffer_size)
+        {
             return Ok(None);
         }
         let mut data: Vec<u32> = Vec::with_capacity(spheres.len().max(1) * SPHERE_WORDS);
@@ -109,11 +167,13 @@ impl GpuRasterizer {
         if data.is_empty() {
             data.resize(SPHERE_WORDS, 0);
         }
-        let sphere_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("spheres"),
-            contents: bytemuck::cast_slice(&data),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let sphere_buf = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("spheres"),
+                contents: bytemuck::cast_slice(&data),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
         let occ_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("occupancy"),
             size: occ_bytes,
@@ -127,7 +187,12 @@ impl GpuRasterizer {
             mapped_at_creation: false,
         });
         // The widest candidate x range sets the dispatch's second dimension.
-        let max_x = spheres.iter().filter(|s| s.lo[0] <= s.hi[0]).map(|s| s.hi[0] - s.lo[0] + 1).max().unwrap_or(0);
+        let max_x = spheres
+            .iter()
+            .filter(|s| s.lo[0] <= s.hi[0])
+            .map(|s| s.hi[0] - s.lo[0] + 1)
+            .max()
+            .unwrap_or(0);
         let per_dispatch = limits.max_compute_workgroups_per_dimension.min(65_535) * WORKGROUP;
         let mut offset = 0u32;
         while (offset as usize) < spheres.len() && max_x > 0 {
@@ -140,23 +205,41 @@ impl GpuRasterizer {
                 sphere_offset: offset,
                 pad: [0; 3],
             };
-            let param_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("raster params"),
-                contents: bytemuck::bytes_of(&p),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+            let param_buf = self
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("raster params"),
+                    contents: bytemuck::bytes_of(&p),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
             let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("raster_spheres"),
                 layout: &self.layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: param_buf.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: sphere_buf.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: occ_buf.as_entire_binding() },
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: param_buf.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: sphere_buf.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: occ_buf.as_entire_binding(),
+                    },
                 ],
             });
-            let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("raster") });
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("raster"),
+                });
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("raster"), timestamp_writes: None });
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("raster"),
+                    timestamp_writes: None,
+                });
                 pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &bind, &[]);
                 pass.dispatch_workgroups(n.div_ceil(WORKGROUP), max_x, 1);
@@ -164,22 +247,33 @@ impl GpuRasterizer {
             self.queue.submit([encoder.finish()]);
             offset += n;
         }
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("readback"),
+            });
         encoder.copy_buffer_to_buffer(&occ_buf, 0, &read_buf, 0, None);
         self.queue.submit([encoder.finish()]);
         let (tx, rx) = std::sync::mpsc::channel();
         read_buf.map_async(wgpu::MapMode::Read, .., move |r| {
             let _ = tx.send(r);
         });
-        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
-        rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
-        let view = read_buf.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| Error::Gpu(e.to_string()))?
+            .map_err(|e| Error::Gpu(e.to_string()))?;
+        let view = read_buf
+            .get_mapped_range(..)
+            .map_err(|e| Error::Gpu(format!("{e:?}")))?;
         let words: Vec<u64> = view
             .chunks_exact(8)
             .map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]))
             .collect();
         drop(view);
         read_buf.unmap();
+        self.take_errors()?;
         Ok(Some(BitGrid::from_words(res, words)))
     }
 }

@@ -61,7 +61,10 @@ pub(crate) fn cell_index(res: u32, ix: u32, iy: u32, iz: u32) -> u32 {
 /// is decided there, and it is the point emitted for a kept cell.
 pub fn cell_sample(params: &RasterParams, cell: [u32; 3]) -> DVec3 {
     let res = params.res as u32;
-    let m = jitter(seed32(params.seed), cell_index(res, cell[0], cell[1], cell[2]));
+    let m = jitter(
+        seed32(params.seed),
+        cell_index(res, cell[0], cell[1], cell[2]),
+    );
     let lattice = DVec3::new(
         (cell[0] * SUBCELLS + m[0]) as f64,
         (cell[1] * SUBCELLS + m[1]) as f64,
@@ -82,12 +85,19 @@ pub(crate) fn isqrt(v: u64) -> u64 {
     r
 }
 
-pub(crate) fn prepare(centers: &[DVec3], radii: &[f64], params: &RasterParams) -> Result<Vec<QSphere>, Error> {
+pub(crate) fn prepare(
+    centers: &[DVec3],
+    radii: &[f64],
+    params: &RasterParams,
+) -> Result<Vec<QSphere>, Error> {
     if params.res == 0 || params.res > MAX_RES {
         return Err(Error::Resolution(params.res));
     }
     if centers.len() != radii.len() {
-        return Err(Error::LengthMismatch { centers: centers.len(), radii: radii.len() });
+        return Err(Error::LengthMismatch {
+            centers: centers.len(),
+            radii: radii.len(),
+        });
     }
     let res = params.res as i64;
     let l = (params.res as u32 * SUBCELLS) as f64;
@@ -99,10 +109,16 @@ pub(crate) fn prepare(centers: &[DVec3], radii: &[f64], params: &RasterParams) -
             if !(c.is_finite() && r.is_finite() && r >= 0.0) {
                 return Err(Error::InvalidSphere(i));
             }
-            let q = (*c * l - DVec3::splat(0.5)).round().clamp(DVec3::splat(-l), DVec3::splat(2.0 * l));
+            let q = (*c * l - DVec3::splat(0.5))
+                .round()
+                .clamp(DVec3::splat(-l), DVec3::splat(2.0 * l));
             let qc = [q.x as i64, q.y as i64, q.z as i64];
             let r2f = (SHRINK * (r * l) * (r * l)).floor();
-            let r2 = if r2f >= u32::MAX as f64 { u32::MAX as u64 } else { r2f as u64 };
+            let r2 = if r2f >= u32::MAX as f64 {
+                u32::MAX as u64
+            } else {
+                r2f as u64
+            };
             let reach = isqrt(r2) as i64 + 1;
             let (mut lo, mut hi) = ([1u32; 3], [0u32; 3]);
             let mut empty = false;
@@ -117,7 +133,12 @@ pub(crate) fn prepare(centers: &[DVec3], radii: &[f64], params: &RasterParams) -
                 // A sphere off the grid: an empty range (lo > hi).
                 (lo, hi) = ([1; 3], [0; 3]);
             }
-            Ok(QSphere { c: qc.map(|v| v as i32), r2: r2 as u32, lo, hi })
+            Ok(QSphere {
+                c: qc.map(|v| v as i32),
+                r2: r2 as u32,
+                lo,
+                hi,
+            })
         })
         .collect()
 }
@@ -135,12 +156,17 @@ pub(crate) fn cell_bbox(centers: &[DVec3], radii: &[f64], res: usize) -> ([u32; 
     let to_cell = |v: f64| v.clamp(0.0, n - 1.0) as u32;
     let a = (lo * n - DVec3::ONE).floor();
     let b = (hi * n + DVec3::ONE).ceil();
-    ([to_cell(a.x), to_cell(a.y), to_cell(a.z)], [to_cell(b.x), to_cell(b.y), to_cell(b.z)])
+    (
+        [to_cell(a.x), to_cell(a.y), to_cell(a.z)],
+        [to_cell(b.x), to_cell(b.y), to_cell(b.z)],
+    )
 }
 
 /// Squared lattice distance from a cell's sample point to a sphere's centre.
 pub(crate) fn dist2(s: &QSphere, x: [u32; 3]) -> u64 {
-    (0..3).map(|a| (x[a] as i64 - s.c[a] as i64).pow(2) as u64).sum()
+    (0..3)
+        .map(|a| (x[a] as i64 - s.c[a] as i64).pow(2) as u64)
+        .sum()
 }
 
 #[cfg(test)]
@@ -156,12 +182,27 @@ mod tests {
             }
         }
         // 1000 expected per level, sd ~ 31: allow 5 sigma.
-        assert!(seen.iter().flatten().all(|&n| (845..1155).contains(&n)), "{seen:?}");
+        assert!(
+            seen.iter().flatten().all(|&n| (845..1155).contains(&n)),
+            "{seen:?}"
+        );
     }
 
     #[test]
     fn isqrt_is_exact() {
-        for v in [0u64, 1, 2, 3, 4, 15, 16, 17, (1 << 40) - 1, 1 << 40, u32::MAX as u64] {
+        for v in [
+            0u64,
+            1,
+            2,
+            3,
+            4,
+            15,
+            16,
+            17,
+            (1 << 40) - 1,
+            1 << 40,
+            u32::MAX as u64,
+        ] {
             let r = isqrt(v);
             assert!(r * r <= v && (r + 1) * (r + 1) > v, "{v}");
         }

@@ -122,7 +122,12 @@ pub enum Error {
 /// # Errors
 /// [`Error::Resolution`], [`Error::LengthMismatch`], [`Error::InvalidSphere`]; [`Error::Gpu`] if the
 /// GPU path fails after a device was found.
-pub fn rasterize(centers: &[DVec3], radii: &[f64], params: &RasterParams, backend: Backend) -> Result<EmptySpace, Error> {
+pub fn rasterize(
+    centers: &[DVec3],
+    radii: &[f64],
+    params: &RasterParams,
+    backend: Backend,
+) -> Result<EmptySpace, Error> {
     let spheres = lattice::prepare(centers, radii, params)?;
     let (occ, used) = match backend {
         Backend::Cpu => (cpu::occupancy(&spheres, params), Backend::Cpu),
@@ -130,14 +135,24 @@ pub fn rasterize(centers: &[DVec3], radii: &[f64], params: &RasterParams, backen
     };
     let bbox = lattice::cell_bbox(centers, radii, params.res);
     let points = occ.narrow_band_points(bbox, params);
-    Ok(EmptySpace { res: params.res, points, n_occupied: occ.count_ones(), backend: used })
+    Ok(EmptySpace {
+        res: params.res,
+        points,
+        n_occupied: occ.count_ones(),
+        backend: used,
+    })
 }
 
 /// Occupancy only (no band): which cells hold a sample point inside some shrunk sphere.
 ///
 /// # Errors
 /// As [`rasterize`].
-pub fn occupancy(centers: &[DVec3], radii: &[f64], params: &RasterParams, backend: Backend) -> Result<BitGrid, Error> {
+pub fn occupancy(
+    centers: &[DVec3],
+    radii: &[f64],
+    params: &RasterParams,
+    backend: Backend,
+) -> Result<BitGrid, Error> {
     let spheres = lattice::prepare(centers, radii, params)?;
     Ok(match backend {
         Backend::Cpu => cpu::occupancy(&spheres, params),
@@ -146,12 +161,18 @@ pub fn occupancy(centers: &[DVec3], radii: &[f64], params: &RasterParams, backen
 }
 
 #[cfg(feature = "gpu")]
-fn gpu_or_cpu(spheres: &[lattice::QSphere], params: &RasterParams) -> Result<(BitGrid, Backend), Error> {
+fn gpu_or_cpu(
+    spheres: &[lattice::QSphere],
+    params: &RasterParams,
+) -> Result<(BitGrid, Backend), Error> {
     match GpuRasterizer::shared() {
         Some(gpu) => match gpu.occupancy(spheres, params)? {
             Some(bits) => Ok((bits, Backend::Gpu)),
             None => {
-                log::info!("grid of {}^3 cells exceeds the GPU's buffer limits; rasterizing on the CPU", params.res);
+                log::info!(
+                    "grid of {}^3 cells exceeds the GPU's buffer limits; rasterizing on the CPU",
+                    params.res
+                );
                 Ok((cpu::occupancy(spheres, params), Backend::Cpu))
             }
         },
@@ -163,7 +184,10 @@ fn gpu_or_cpu(spheres: &[lattice::QSphere], params: &RasterParams) -> Result<(Bi
 }
 
 #[cfg(not(feature = "gpu"))]
-fn gpu_or_cpu(spheres: &[lattice::QSphere], params: &RasterParams) -> Result<(BitGrid, Backend), Error> {
+fn gpu_or_cpu(
+    spheres: &[lattice::QSphere],
+    params: &RasterParams,
+) -> Result<(BitGrid, Backend), Error> {
     log::info!("rfta-raster was built without the `gpu` feature; rasterizing on the CPU");
     Ok((cpu::occupancy(spheres, params), Backend::Cpu))
 }

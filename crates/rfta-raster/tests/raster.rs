@@ -5,7 +5,14 @@ use rfta_raster::{Backend, RasterParams, SUBCELLS, cell_sample, occupancy, raste
 
 fn random_spheres(n: usize, seed: u64, max_r: f64) -> (Vec<DVec3>, Vec<f64>) {
     let mut rng = Rng::new(seed);
-    (0..n).map(|_| (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()), rng.next_f64() * max_r)).unzip()
+    (0..n)
+        .map(|_| {
+            (
+                DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()),
+                rng.next_f64() * max_r,
+            )
+        })
+        .unzip()
 }
 
 /// The brute-force oracle for one cell, written from the documented rule: the cell's sample
@@ -31,7 +38,13 @@ fn has_occupied_neighbour(occ: &rfta_raster::BitGrid, i: usize, j: usize, k: usi
 
 #[test]
 fn occupancy_and_band_match_brute_force_at_every_cell() {
-    for (n, max_r, res, seed) in [(1, 0.3, 16, 1), (12, 0.2, 24, 2), (60, 0.12, 33, 3), (5, 0.9, 20, 4), (25, 0.25, 12, 77)] {
+    for (n, max_r, res, seed) in [
+        (1, 0.3, 16, 1),
+        (12, 0.2, 24, 2),
+        (60, 0.12, 33, 3),
+        (5, 0.9, 20, 4),
+        (25, 0.25, 12, 77),
+    ] {
         let (centers, radii) = random_spheres(n, seed, max_r);
         let params = RasterParams { res, seed };
         let occ = occupancy(&centers, &radii, &params, Backend::Cpu).expect("occupancy");
@@ -45,9 +58,16 @@ fn occupancy_and_band_match_brute_force_at_every_cell() {
                 for k in 0..res {
                     let sample = cell_sample(&params, [i as u32, j as u32, k as u32]);
                     let lo = DVec3::new(i as f64, j as f64, k as f64) / res as f64;
-                    assert!(sample.cmpge(lo).all() && sample.cmplt(lo + DVec3::splat(1.0 / res as f64)).all());
+                    assert!(
+                        sample.cmpge(lo).all()
+                            && sample.cmplt(lo + DVec3::splat(1.0 / res as f64)).all()
+                    );
                     let occupied = brute_occupied(res, &centers, &radii, sample);
-                    assert_eq!(occ.get(i, j, k), occupied, "n={n} res={res} cell {i} {j} {k}");
+                    assert_eq!(
+                        occ.get(i, j, k),
+                        occupied,
+                        "n={n} res={res} cell {i} {j} {k}"
+                    );
                     if !occupied && has_occupied_neighbour(&occ, i, j, k) {
                         expected_points.push(sample);
                     }
@@ -81,8 +101,24 @@ fn bad_input_is_an_error() {
     assert!(rasterize(&[DVec3::ZERO], &[0.1, 0.2], &p, Backend::Cpu).is_err());
     assert!(rasterize(&[DVec3::NAN], &[0.1], &p, Backend::Cpu).is_err());
     assert!(rasterize(&[DVec3::ZERO], &[-0.1], &p, Backend::Cpu).is_err());
-    assert!(rasterize(&[DVec3::ZERO], &[0.1], &RasterParams { res: 0, seed: 0 }, Backend::Cpu).is_err());
-    assert!(rasterize(&[DVec3::ZERO], &[0.1], &RasterParams { res: 2048, seed: 0 }, Backend::Cpu).is_err());
+    assert!(
+        rasterize(
+            &[DVec3::ZERO],
+            &[0.1],
+            &RasterParams { res: 0, seed: 0 },
+            Backend::Cpu
+        )
+        .is_err()
+    );
+    assert!(
+        rasterize(
+            &[DVec3::ZERO],
+            &[0.1],
+            &RasterParams { res: 2048, seed: 0 },
+            Backend::Cpu
+        )
+        .is_err()
+    );
     // No spheres: nothing occupied, nothing emitted.
     let empty = rasterize(&[], &[], &p, Backend::Cpu).expect("empty");
     assert!(empty.points.is_empty() && empty.n_occupied == 0);
@@ -91,7 +127,17 @@ fn bad_input_is_an_error() {
 #[test]
 fn default_resolution_follows_the_reference_heuristic() {
     // 64 * ceil(n^(1/3) / 16) on the paper's grids of (N + 1)^3 samples (rfta-reference.md table).
-    for (n, r) in [(7, 64), (11, 64), (21, 128), (31, 128), (41, 192), (51, 256), (61, 256), (81, 384), (101, 448)] {
+    for (n, r) in [
+        (7, 64),
+        (11, 64),
+        (21, 128),
+        (31, 128),
+        (41, 192),
+        (51, 256),
+        (61, 256),
+        (81, 384),
+        (101, 448),
+    ] {
         assert_eq!(rfta_raster::default_resolution(n * n * n), r, "N + 1 = {n}");
     }
 }
@@ -102,12 +148,20 @@ fn default_resolution_follows_the_reference_heuristic() {
 #[test]
 fn gpu_matches_cpu() {
     let Some(gpu) = rfta_raster::GpuRasterizer::shared() else {
-        assert!(std::env::var_os("CI").is_none(), "no GPU adapter under CI: install lavapipe (mesa-vulkan-drivers)");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "no GPU adapter under CI: install lavapipe (mesa-vulkan-drivers)"
+        );
         eprintln!("SKIPPED gpu_matches_cpu: no GPU adapter");
         return;
     };
     eprintln!("gpu_matches_cpu on {}", gpu.describe());
-    for (n, max_r, res, seed) in [(1, 0.3, 16, 1), (500, 0.1, 64, 2), (2000, 0.3, 96, 3), (50, 1.5, 40, 4)] {
+    for (n, max_r, res, seed) in [
+        (1, 0.3, 16, 1),
+        (500, 0.1, 64, 2),
+        (2000, 0.3, 96, 3),
+        (50, 1.5, 40, 4),
+    ] {
         let (centers, radii) = random_spheres(n, seed, max_r);
         let params = RasterParams { res, seed };
         let cpu = occupancy(&centers, &radii, &params, Backend::Cpu).expect("cpu");

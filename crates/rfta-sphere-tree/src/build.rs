@@ -55,15 +55,26 @@ impl SphereTree {
     /// A tree over `spheres[i]` for each `i` in `indices` (duplicates are kept once), reporting
     /// those indices. Indices out of range are skipped.
     pub fn with_indices(spheres: &[Sphere], indices: &[u32]) -> Self {
-        let mut ids: Vec<u32> = indices.iter().copied().filter(|&i| (i as usize) < spheres.len()).collect();
+        let mut ids: Vec<u32> = indices
+            .iter()
+            .copied()
+            .filter(|&i| (i as usize) < spheres.len())
+            .collect();
         ids.sort_unstable();
         ids.dedup();
         let chosen: Vec<Sphere> = ids.iter().map(|&i| spheres[i as usize]).collect();
         if chosen.is_empty() {
             return Self::default();
         }
-        let boxes: Vec<SphereBox> = chosen.iter().map(|s| SphereBox(to_obvhs(&s.aabb()))).collect();
-        let ob = build_bvh2(&boxes, BvhBuildParams::fast_build(), &mut Duration::default());
+        let boxes: Vec<SphereBox> = chosen
+            .iter()
+            .map(|s| SphereBox(to_obvhs(&s.aabb())))
+            .collect();
+        let ob = build_bvh2(
+            &boxes,
+            BvhBuildParams::fast_build(),
+            &mut Duration::default(),
+        );
         let mut tree = Self::default();
         let mut order = Vec::with_capacity(chosen.len());
         flatten(&mut tree.nodes, &ob, 0, &chosen, &mut order);
@@ -82,7 +93,9 @@ impl SphereTree {
             return Self::new(spheres);
         }
         let mut rng = Rng::new(seed);
-        let ids: Vec<u32> = (0..batch_size).map(|_| rng.below(n as u64) as u32).collect();
+        let ids: Vec<u32> = (0..batch_size)
+            .map(|_| rng.below(n as u64) as u32)
+            .collect();
         Self::with_indices(spheres, &ids)
     }
 
@@ -104,15 +117,33 @@ impl SphereTree {
     }
 }
 
-fn flatten(nodes: &mut Vec<Node>, ob: &Bvh2, ob_idx: usize, spheres: &[Sphere], order: &mut Vec<u32>) -> u32 {
+fn flatten(
+    nodes: &mut Vec<Node>,
+    ob: &Bvh2,
+    ob_idx: usize,
+    spheres: &[Sphere],
+    order: &mut Vec<u32>,
+) -> u32 {
     let node = &ob.nodes[ob_idx];
     let my = nodes.len() as u32;
-    let empty = Node { centers: Aabb::EMPTY, max_radius: 0.0, bounds: Aabb::EMPTY, a: 0, b: 0, leaf: false };
+    let empty = Node {
+        centers: Aabb::EMPTY,
+        max_radius: 0.0,
+        bounds: Aabb::EMPTY,
+        a: 0,
+        b: 0,
+        leaf: false,
+    };
     nodes.push(empty);
     let filled = if node.is_leaf() {
         let first = order.len() as u32;
         let range = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        let mut out = Node { leaf: true, a: first, b: node.prim_count, ..empty };
+        let mut out = Node {
+            leaf: true,
+            a: first,
+            b: node.prim_count,
+            ..empty
+        };
         for &p in &ob.primitive_indices[range] {
             let s = spheres[p as usize];
             order.push(p);

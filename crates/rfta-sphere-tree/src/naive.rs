@@ -6,12 +6,21 @@ use rfta_geom::{Sphere, glam::DVec3};
 
 /// Whether some sphere `j != ignore` has `|x - p_j| - r_j < threshold`.
 pub fn inside_any(spheres: &[Sphere], x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
-    spheres.iter().enumerate().any(|(j, s)| Some(j as u32) != ignore && s.signed_distance(x) < threshold)
+    spheres
+        .iter()
+        .enumerate()
+        .any(|(j, s)| Some(j as u32) != ignore && s.signed_distance(x) < threshold)
 }
 
 /// Up to `k` spheres `j != ignore` with `|x - p_j| - r_j < threshold`, the deepest first (smallest
 /// signed distance; ties by index).
-pub fn spheres_containing(spheres: &[Sphere], x: DVec3, k: usize, threshold: f64, ignore: Option<u32>) -> Vec<u32> {
+pub fn spheres_containing(
+    spheres: &[Sphere],
+    x: DVec3,
+    k: usize,
+    threshold: f64,
+    ignore: Option<u32>,
+) -> Vec<u32> {
     let mut hits: Vec<(f64, u32)> = spheres
         .iter()
         .enumerate()

@@ -27,7 +27,9 @@ impl SphereTree {
             let node = &self.nodes[idx as usize];
             if node.leaf {
                 for s in node.a as usize..(node.a + node.b) as usize {
-                    if Some(self.ids[s]) != ignore && (x - self.centers[s]).length() - self.radii[s] < threshold {
+                    if Some(self.ids[s]) != ignore
+                        && (x - self.centers[s]).length() - self.radii[s] < threshold
+                    {
                         return true;
                     }
                 }
@@ -40,7 +42,13 @@ impl SphereTree {
 
     /// Up to `k` spheres `j != ignore` with `|x - p_j| - r_j < threshold`, deepest first (ties by
     /// index): the `k` smallest signed distances.
-    pub fn spheres_containing(&self, x: DVec3, k: usize, threshold: f64, ignore: Option<u32>) -> Vec<u32> {
+    pub fn spheres_containing(
+        &self,
+        x: DVec3,
+        k: usize,
+        threshold: f64,
+        ignore: Option<u32>,
+    ) -> Vec<u32> {
         let mut hits = Vec::new();
         self.spheres_containing_into(x, k, threshold, ignore, &mut hits);
         hits.into_iter().map(|(_, j)| j).collect()
@@ -95,7 +103,12 @@ impl SphereTree {
     /// [`SphereTree::inside_any`] with the reference implementation's traversal: descend into every
     /// node whose box of spheres (padded by the threshold, when positive) holds `x`, left before
     /// right, with no distance bound. Same answers; kept as the baseline for benchmarks.
-    pub fn inside_any_reference_order(&self, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
+    pub fn inside_any_reference_order(
+        &self,
+        x: DVec3,
+        threshold: f64,
+        ignore: Option<u32>,
+    ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -108,7 +121,9 @@ impl SphereTree {
             }
             if node.leaf {
                 for s in node.a as usize..(node.a + node.b) as usize {
-                    if Some(self.ids[s]) != ignore && (x - self.centers[s]).length() - self.radii[s] < threshold {
+                    if Some(self.ids[s]) != ignore
+                        && (x - self.centers[s]).length() - self.radii[s] < threshold
+                    {
                         return true;
                     }
                 }
@@ -129,7 +144,10 @@ fn less(a: (f64, u32), b: (f64, u32)) -> bool {
 /// Pushes both children, the one with the smaller bound last so that it is visited first.
 fn push_ordered(stack: &mut Vec<(u32, f64)>, nodes: &[Node], node: &Node, x: DVec3) {
     let (l, r) = (node.a, node.b);
-    let (lb_l, lb_r) = (lower_bound(&nodes[l as usize], x), lower_bound(&nodes[r as usize], x));
+    let (lb_l, lb_r) = (
+        lower_bound(&nodes[l as usize], x),
+        lower_bound(&nodes[r as usize], x),
+    );
     if lb_l <= lb_r {
         stack.push((r, lb_r));
         stack.push((l, lb_l));

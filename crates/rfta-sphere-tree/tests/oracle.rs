@@ -18,8 +18,16 @@ fn random_spheres(n: usize, seed: u64, max_r: f64) -> Vec<Sphere> {
 fn check(spheres: &[Sphere], tree: &SphereTree, x: DVec3, ignore: Option<u32>) {
     for threshold in [-1e-4, 0.0, 1e-4, 0.05] {
         let expect = naive::inside_any(spheres, x, threshold, ignore);
-        assert_eq!(tree.inside_any(x, threshold, ignore), expect, "inside_any at {x}, t={threshold}");
-        assert_eq!(tree.inside_any_reference_order(x, threshold, ignore), expect, "reference order at {x}");
+        assert_eq!(
+            tree.inside_any(x, threshold, ignore),
+            expect,
+            "inside_any at {x}, t={threshold}"
+        );
+        assert_eq!(
+            tree.inside_any_reference_order(x, threshold, ignore),
+            expect,
+            "reference order at {x}"
+        );
         for k in [1, 3, 17, usize::MAX] {
             assert_eq!(
                 tree.spheres_containing(x, k, threshold, ignore),
@@ -36,11 +44,20 @@ fn queries(spheres: &[Sphere], n: usize, seed: u64) -> Vec<(DVec3, Option<u32>)>
         .map(|q| {
             if q % 2 == 0 || spheres.is_empty() {
                 // Anywhere around the unit box.
-                (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 1.4 - DVec3::splat(0.2), None)
+                (
+                    DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 1.4
+                        - DVec3::splat(0.2),
+                    None,
+                )
             } else {
                 // On a sphere's surface, ignoring it: the reconstruction's query.
                 let i = rng.below(spheres.len() as u64) as usize;
-                let dir = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5).normalize_or(DVec3::X);
+                let dir = DVec3::new(
+                    rng.next_f64() - 0.5,
+                    rng.next_f64() - 0.5,
+                    rng.next_f64() - 0.5,
+                )
+                .normalize_or(DVec3::X);
                 (spheres[i].center + spheres[i].radius * dir, Some(i as u32))
             }
         })
@@ -67,7 +84,10 @@ fn agrees_with_oracle_on_adversarial_sets() {
         for j in 0..12 {
             for k in 0..12 {
                 let p = DVec3::new(i as f64, j as f64, k as f64) / 11.0;
-                sdf_like.push(Sphere::new(p, ((p - DVec3::splat(0.5)).length() - 0.3).abs()));
+                sdf_like.push(Sphere::new(
+                    p,
+                    ((p - DVec3::splat(0.5)).length() - 0.3).abs(),
+                ));
             }
         }
     }
@@ -102,7 +122,10 @@ fn batches_are_seeded_subsets_drawn_with_replacement() {
     let chosen: Vec<Sphere> = a.indices().iter().map(|&i| spheres[i as usize]).collect();
     let map = a.indices();
     for (x, _) in queries(&spheres, 200, 9) {
-        let expect: Vec<u32> = naive::spheres_containing(&chosen, x, 5, 1e-4, None).iter().map(|&j| map[j as usize]).collect();
+        let expect: Vec<u32> = naive::spheres_containing(&chosen, x, 5, 1e-4, None)
+            .iter()
+            .map(|&j| map[j as usize])
+            .collect();
         assert_eq!(a.spheres_containing(x, 5, 1e-4, None), expect);
     }
 }
@@ -112,7 +135,10 @@ fn empty_tree_answers_nothing() {
     let tree = SphereTree::new(&[]);
     assert!(tree.is_empty());
     assert!(!tree.inside_any(DVec3::ZERO, 1.0, None));
-    assert!(tree.spheres_containing(DVec3::ZERO, 3, 1.0, None).is_empty());
+    assert!(
+        tree.spheres_containing(DVec3::ZERO, 3, 1.0, None)
+            .is_empty()
+    );
 }
 
 proptest! {
