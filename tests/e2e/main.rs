@@ -2,3 +2,6 @@
 
 /// Mesh loading, topology and exact SDF sampling against the prepared inputs.
 mod data_inputs;
+
+/// Sphere tree and rasterizer on the real SDF grids.
+mod spheres;

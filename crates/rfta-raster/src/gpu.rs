@@ -151,7 +151,7 @@ impl GpuRasterizer {
         let occ_bytes = (n_words64 * 8) as u64;
         let sphere_bytes = (spheres.len().max(1) * SPHERE_WORDS * 4) as u64;
         let limits = self.device.limits();
-        let binding_limit = limits.max_storage_buffer_binding_size as u64;
+        let binding_limit = limits.max_storage_buffer_binding_size;
         if occ_bytes > binding_limit.min(limits.max_buffer_size)
             || sphere_bytes > binding_limit.min(limits.max_buffer_size)
         {

@@ -146,6 +146,10 @@ fn default_resolution_follows_the_reference_heuristic() {
 /// present; elsewhere the test says it was skipped.
 #[cfg(feature = "gpu")]
 #[test]
+#[expect(
+    clippy::print_stderr,
+    reason = "the test names the adapter it ran on, or says it was skipped"
+)]
 fn gpu_matches_cpu() {
     let Some(gpu) = rfta_raster::GpuRasterizer::shared() else {
         assert!(
