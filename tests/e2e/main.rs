@@ -5,3 +5,6 @@ mod data_inputs;
 
 /// Sphere tree and rasterizer on the real SDF grids.
 mod spheres;
+
+/// Marching cubes against the reference (libigl) results.
+mod mc_reference;

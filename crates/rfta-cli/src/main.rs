@@ -39,6 +39,20 @@ struct Cli {
 enum Command {
     /// Sample the exact signed distance of a mesh (negative inside) on a regular grid.
     Sample(sample::Args),
+    /// Marching cubes: the iso-surface of an SDF grid (the baseline rfta is compared against).
+    Mc {
+        /// The SDF grid (.npy or .exr).
+        input: PathBuf,
+        /// Output mesh (.obj .ply .stl .glb).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Grid bounds, overriding the sidecar (as for `sample`).
+        #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = ui::parse_bounds)]
+        bounds: Option<rfta_io::GridBounds>,
+        /// Iso value.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        iso: f64,
+    },
     /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
     Info {
         /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .ply .csv .xyz SDF samples).
@@ -63,6 +77,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),
         Command::Info { file, bounds } => info::run(&file, bounds, &ui),
+        Command::Mc {
+            input,
+            output,
+            bounds,
+            iso,
+        } => mc(&input, &output, bounds, iso, &ui),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -80,4 +100,40 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+fn mc(
+    input: &std::path::Path,
+    output: &std::path::Path,
+    bounds: Option<rfta_io::GridBounds>,
+    iso: f64,
+    ui: &ui::Ui,
+) -> anyhow::Result<()> {
+    let samples = rfta_io::read_sdf(input, bounds)?.validate(input)?;
+    let Some(grid) = samples.as_grid() else {
+        anyhow::bail!(
+            "{}: marching cubes needs a grid, not scattered samples",
+            input.display()
+        );
+    };
+    let t = std::time::Instant::now();
+    let mesh = rfta_mc::marching_cubes(grid, samples.values(), iso);
+    ui.detail(format!(
+        "marching cubes in {:.3} s",
+        t.elapsed().as_secs_f64()
+    ));
+    if mesh.is_empty() {
+        anyhow::bail!(
+            "{}: the values never cross {iso}, so there is no surface",
+            input.display()
+        );
+    }
+    rfta_io::write_mesh(output, &mesh)?;
+    ui.say(format!(
+        "wrote {} ({} vertices, {} faces)",
+        output.display(),
+        mesh.n_vertices(),
+        mesh.n_faces()
+    ));
+    Ok(())
 }
