@@ -1,8 +1,9 @@
 //! Project automation, run as `cargo xtask <command>`:
 //!
-//! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, shaders, tidy.
+//! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, shaders, tidy, a quick eval.
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `tidy`: repository rules (see [`tidy`]).
+//! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
 
 #![expect(
     clippy::print_stdout,
@@ -10,6 +11,7 @@
     reason = "a command-line tool reports on its terminal"
 )]
 
+mod eval;
 mod shaders;
 mod tidy;
 
@@ -22,9 +24,12 @@ const HELP: &str = "\
 cargo xtask <command>
 
 commands:
-  ci        fmt --check, clippy -D warnings, tests, docs -D warnings, shaders, tidy
+  ci        fmt --check, clippy -D warnings, tests, docs -D warnings, shaders, tidy, eval --quick
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
+  eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-paper]
+            [--samples N] [--quick] [--out DIR]: Table 2 with marching cubes measured in the same run,
+            written to target/eval/<run>/ (results.csv, report.md, chamfer.svg, contact_sheet.png)
 ";
 
 fn main() -> Result<()> {
@@ -34,6 +39,7 @@ fn main() -> Result<()> {
         Some("ci") => ci(&root),
         Some("shaders") => shaders::run(&root),
         Some("tidy") => tidy::run(&root),
+        Some("eval") => eval::run(&root, &args[1..]),
         Some("help" | "--help" | "-h") | None => {
             print!("{HELP}");
             Ok(())
@@ -94,6 +100,15 @@ fn ci(root: &Path) -> Result<()> {
     shaders::run(root)?;
     println!("==> tidy");
     tidy::run(root)?;
+    println!("==> eval --quick");
+    eval::run(
+        root,
+        &[
+            "--quick".to_string(),
+            "--out".to_string(),
+            root.join("target/eval/ci-quick").display().to_string(),
+        ],
+    )?;
     println!("==> ci passed");
     Ok(())
 }

@@ -1,0 +1,398 @@
+//! `cargo xtask eval`: the paper's Table 2 on a folder of shapes, with marching cubes measured in
+//! the same run, scored against the ground truth, next to the reference results when present.
+//!
+//! ```text
+//! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-paper]
+//!                  [--samples N] [--quick] [--out DIR]
+//! ```
+//!
+//! `--inputs DIR` takes prepared inputs (`NAME/gt.obj`, `NAME/sdf_n{N}.npy`) as they are; a
+//! missing grid is sampled from `gt.obj`. `--meshes DIR` takes raw meshes, normalises each (box
+//! centred, longest side 1, a rotation seeded by the shape's name) and samples its SDF on
+//! `linspace(-1, 1, N + 1)^3` with `rfta sample`'s code. Output: `target/eval/<run>/results.csv`,
+//! `report.md`, `chamfer.svg` and `contact_sheet.png`.
+
+mod render;
+mod report;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use rfta_geom::{Grid, Layout, TriMesh, glam::DMat3, glam::DVec3, rng};
+use rfta_mesh::MeshIndex;
+
+/// One shape of the evaluation.
+pub(crate) struct Shape {
+    pub(crate) name: String,
+    pub(crate) gt: TriMesh,
+    /// Where prepared grids live (`--inputs`), if any.
+    dir: Option<PathBuf>,
+}
+
+/// One (shape, resolution, method) result.
+#[derive(Debug, Clone)]
+pub(crate) struct Row {
+    pub(crate) shape: String,
+    pub(crate) n: usize,
+    pub(crate) method: String,
+    pub(crate) seconds: f64,
+    pub(crate) chamfer: f64,
+    pub(crate) hausdorff: f64,
+    pub(crate) e_sdf: f64,
+    pub(crate) watertight: bool,
+    pub(crate) genus: Option<i64>,
+    pub(crate) gt_genus: Option<i64>,
+    pub(crate) components: usize,
+    pub(crate) status: String,
+}
+
+struct Args {
+    inputs: Option<PathBuf>,
+    meshes: Option<PathBuf>,
+    res: Vec<usize>,
+    methods: Vec<String>,
+    samples: usize,
+    quick: bool,
+    out: Option<PathBuf>,
+}
+
+const METHODS: [&str; 3] = ["mc", "rfta", "rfta-paper"];
+
+fn parse(args: &[String]) -> Result<Args> {
+    let mut a = Args {
+        inputs: None,
+        meshes: None,
+        res: vec![10, 20, 30],
+        methods: METHODS.iter().map(|m| m.to_string()).collect(),
+        samples: 1_000_000,
+        quick: false,
+        out: None,
+    };
+    let mut it = args.iter();
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().with_context(|| format!("{flag} needs a value"));
+        match flag.as_str() {
+            "--inputs" => a.inputs = Some(PathBuf::from(value()?)),
+            "--meshes" => a.meshes = Some(PathBuf::from(value()?)),
+            "--res" => {
+                a.res = value()?
+                    .split(',')
+                    .map(|t| t.trim().parse::<usize>())
+                    .collect::<Result<_, _>>()
+                    .context("--res takes numbers like 10,20,30")?;
+            }
+            "--methods" => {
+                a.methods = value()?.split(',').map(|t| t.trim().to_string()).collect();
+                if let Some(bad) = a.methods.iter().find(|m| !METHODS.contains(&m.as_str())) {
+                    bail!("unknown method '{bad}' (known: {})", METHODS.join(", "));
+                }
+            }
+            "--samples" => a.samples = value()?.parse().context("--samples takes a number")?,
+            "--quick" => a.quick = true,
+            "--out" => a.out = Some(PathBuf::from(value()?)),
+            other => bail!("unknown eval option '{other}'"),
+        }
+    }
+    if a.inputs.is_some() && a.meshes.is_some() {
+        bail!("give --inputs or --meshes, not both");
+    }
+    if a.res.contains(&0) {
+        bail!("--res values must be positive");
+    }
+    Ok(a)
+}
+
+pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
+    let mut a = parse(args)?;
+    let data = root.join("../shared/data");
+    if a.inputs.is_none() && a.meshes.is_none() {
+        a.inputs = Some(
+            std::env::var_os("RFTA_DATA_DIR")
+                .map(PathBuf::from)
+                .unwrap_or(data.clone())
+                .join("inputs"),
+        );
+    }
+    let (mut shapes, mut unreadable) = match (&a.inputs, &a.meshes) {
+        (Some(dir), _) => load_inputs(dir)?,
+        (_, Some(dir)) => load_meshes(dir)?,
+        _ => unreachable!("one of them is set above"),
+    };
+    if a.quick {
+        // One small shape, two resolutions, fewer samples: the CI smoke run.
+        unreadable.clear();
+        shapes.sort_by_key(|s| s.gt.n_faces());
+        shapes.truncate(1);
+        a.res = vec![10, 20];
+        a.samples = a.samples.min(100_000);
+    }
+    if shapes.is_empty() {
+        bail!("no shapes found");
+    }
+    let run_id = format!(
+        "{}-{}",
+        if a.quick { "quick" } else { "full" },
+        std::process::id()
+    );
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| root.join("target/eval").join(&run_id));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+
+    let jobs = shapes.len() * a.res.len() * a.methods.len();
+    let bar = indicatif::ProgressBar::new(jobs as u64);
+    let mut rows = Vec::new();
+    // A shape that cannot be read is a row per job, so the report shows it.
+    for (name, why) in &unreadable {
+        eprintln!("warning: skipping {name}: {why}");
+        for &n in &a.res {
+            for method in &a.methods {
+                let status = format!("unreadable input: {why}");
+                rows.push(Row {
+                    shape: name.clone(),
+                    n,
+                    method: method.clone(),
+                    seconds: 0.0,
+                    chamfer: f64::NAN,
+                    hausdorff: f64::NAN,
+                    e_sdf: f64::NAN,
+                    watertight: false,
+                    genus: None,
+                    gt_genus: None,
+                    components: 0,
+                    status,
+                });
+            }
+        }
+    }
+    let mut renders = Vec::new();
+    for shape in &shapes {
+        let gt_summary = rfta_metrics::MeshSummary::of(&shape.gt);
+        let gt_index = MeshIndex::new(&shape.gt)
+            .with_context(|| format!("{}: empty ground truth", shape.name))?;
+        let mut shape_renders = vec![(format!("{} GT", shape.name), shape.gt.clone())];
+        for &n in &a.res {
+            let (grid, values) = grid_for(shape, &gt_index, n)?;
+            for method in &a.methods {
+                bar.set_message(format!("{} n={n} {method}", shape.name));
+                let t = Instant::now();
+                let result = run_method(method, &grid, &values);
+                let seconds = t.elapsed().as_secs_f64();
+                let row = match result {
+                    Ok(mesh) if !mesh.is_empty() => {
+                        let s = rfta_metrics::MeshSummary::of(&mesh);
+                        let positions: Vec<DVec3> =
+                            (0..grid.len()).map(|i| grid.position(i)).collect();
+                        let chamfer = rfta_metrics::chamfer(&shape.gt, &mesh, a.samples, 1)?;
+                        let hausdorff = rfta_metrics::hausdorff(&shape.gt, &mesh)?;
+                        let e_sdf = rfta_metrics::sdf_energy(&positions, &values, &mesh)?;
+                        if method == "mc" || n == *a.res.last().unwrap_or(&n) {
+                            shape_renders.push((format!("{method} n={n}"), mesh.clone()));
+                        }
+                        Row {
+                            shape: shape.name.clone(),
+                            n,
+                            method: method.clone(),
+                            seconds,
+                            chamfer,
+                            hausdorff,
+                            e_sdf,
+                            watertight: s.watertight,
+                            genus: s.genus,
+                            gt_genus: gt_summary.genus,
+                            components: s.components,
+                            status: "ok".into(),
+                        }
+                    }
+                    Ok(_) => failed_row(
+                        shape,
+                        n,
+                        method,
+                        seconds,
+                        gt_summary.genus,
+                        "empty mesh".into(),
+                    ),
+                    Err(e) => failed_row(shape, n, method, seconds, gt_summary.genus, e),
+                };
+                rows.push(row);
+                bar.inc(1);
+            }
+        }
+        renders.push(shape_renders);
+    }
+    bar.finish_and_clear();
+    let reference = report::read_reference(&data.join("reference/gpytoolbox.csv"));
+    report::write_csv(&out.join("results.csv"), &rows)?;
+    report::write_markdown(
+        &out.join("report.md"),
+        &rows,
+        &reference,
+        &a.res,
+        &a.methods,
+        a.samples,
+    )?;
+    report::write_svg(
+        &out.join("chamfer.svg"),
+        &rows,
+        &reference,
+        &a.res,
+        &a.methods,
+    )?;
+    render::write_contact_sheet(&out.join("contact_sheet.png"), &renders)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn failed_row(
+    shape: &Shape,
+    n: usize,
+    method: &str,
+    seconds: f64,
+    gt_genus: Option<i64>,
+    why: String,
+) -> Row {
+    Row {
+        shape: shape.name.clone(),
+        n,
+        method: method.to_string(),
+        seconds,
+        chamfer: f64::NAN,
+        hausdorff: f64::NAN,
+        e_sdf: f64::NAN,
+        watertight: false,
+        genus: None,
+        gt_genus,
+        components: 0,
+        status: why,
+    }
+}
+
+/// Runs one method; an error is recorded in the row's status, so the run goes on.
+fn run_method(method: &str, grid: &Grid, values: &[f64]) -> Result<TriMesh, String> {
+    match method {
+        "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
+        // The reconstruction lands with the pipeline crate; until then its rows say so.
+        "rfta" | "rfta-paper" => {
+            Err("unavailable: the reconstruction pipeline is not implemented yet".into())
+        }
+        other => Err(format!("unknown method {other}")),
+    }
+}
+
+/// The grid of a shape at resolution `n`: the prepared `sdf_n{n}.npy` if present, else sampled.
+fn grid_for(shape: &Shape, gt: &MeshIndex, n: usize) -> Result<(Grid, Vec<f64>)> {
+    if let Some(dir) = &shape.dir {
+        let path = dir.join(format!("sdf_n{n}.npy"));
+        if path.is_file() {
+            let raw = rfta_io::read_sdf(&path, None)?;
+            if let Layout::Grid(g) = raw.layout {
+                return Ok((g, raw.values));
+            }
+        }
+    }
+    let grid = Grid::cube(n, -1.0, 1.0)?;
+    let values = gt.signed_distance_grid(&grid, &|| {});
+    Ok((grid, values))
+}
+
+/// Shapes that load, and `(name, reason)` for those that do not.
+type Loaded = (Vec<Shape>, Vec<(String, String)>);
+
+fn load_inputs(dir: &Path) -> Result<Loaded> {
+    let mut shapes = Vec::new();
+    let mut unreadable = Vec::new();
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("gt.obj").is_file())
+        .collect();
+    entries.sort();
+    for p in entries {
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match rfta_io::read_mesh(&p.join("gt.obj")) {
+            Ok(gt) => shapes.push(Shape {
+                name,
+                gt,
+                dir: Some(p),
+            }),
+            Err(e) => unreadable.push((name, e.to_string())),
+        }
+    }
+    Ok((shapes, unreadable))
+}
+
+fn load_meshes(dir: &Path) -> Result<Loaded> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| rfta_io::MeshFormat::from_path(p).is_ok())
+        .collect();
+    files.sort();
+    let mut shapes = Vec::new();
+    let mut unreadable = Vec::new();
+    for p in files {
+        let name = p
+            .file_stem()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match rfta_io::read_mesh(&p) {
+            Ok(mut gt) if !gt.is_empty() => {
+                normalize(&mut gt, &name);
+                shapes.push(Shape {
+                    name,
+                    gt,
+                    dir: None,
+                });
+            }
+            Ok(_) => unreadable.push((name, "the mesh has no triangles".into())),
+            Err(e) => unreadable.push((name, e.to_string())),
+        }
+    }
+    Ok((shapes, unreadable))
+}
+
+/// The paper's preparation: bounding box centred at the origin, longest side 1, then a rotation
+/// about a random axis by a random angle, seeded by the shape's name (Sellán et al. 2024, §5).
+fn normalize(mesh: &mut TriMesh, name: &str) {
+    let b = mesh.bounds();
+    let (center, scale) = (b.center(), b.longest_side().max(f64::MIN_POSITIVE));
+    let seed = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, c| {
+        (h ^ c as u64).wrapping_mul(0x100_0000_01b3)
+    });
+    let mut r = rng::Rng::new(seed);
+    let axis = DVec3::new(r.next_f64(), r.next_f64(), r.next_f64()).normalize_or(DVec3::Z);
+    let rot = DMat3::from_axis_angle(axis, r.next_f64() * std::f64::consts::TAU);
+    mesh.map_vertices(|v| rot * ((v - center) / scale));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalize_centres_scales_and_rotates_by_name() {
+        let mut a = rfta_geom::shapes::cuboid(DVec3::new(2.0, 1.0, 0.5));
+        a.map_vertices(|v| v + DVec3::new(5.0, -3.0, 1.0));
+        let mut b = a.clone();
+        normalize(&mut a, "box");
+        normalize(&mut b, "box");
+        assert_eq!(a, b, "the rotation is seeded by the name");
+        // Rotation keeps the centre at the origin and the longest edge (4 units, scaled to 1) at 1.
+        let c = a.vertices.iter().copied().sum::<DVec3>() / a.n_vertices() as f64;
+        assert!(c.length() < 1e-12);
+        let longest = (0..a.n_vertices()).flat_map(|i| (0..a.n_vertices()).map(move |j| (i, j)));
+        let diag = longest
+            .map(|(i, j)| a.vertices[i].distance(a.vertices[j]))
+            .fold(0.0, f64::max);
+        // The box's diagonal sqrt(16 + 4 + 1) / 4.
+        assert!((diag - 21f64.sqrt() / 4.0).abs() < 1e-12, "{diag}");
+        let mut other = b.clone();
+        normalize(&mut other, "another name");
+        assert_ne!(other, b);
+    }
+}

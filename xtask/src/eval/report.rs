@@ -1,0 +1,413 @@
+//! The evaluation's outputs: results.csv, report.md (Table 2's layout), chamfer.svg.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::Result;
+
+use super::Row;
+
+/// Reference metrics by (shape, n, our method name): (chamfer, hausdorff, e_sdf, cpu seconds).
+pub(crate) type Reference = HashMap<(String, usize, String), (f64, f64, f64, f64)>;
+
+/// Reads `reference/gpytoolbox.csv` if present (methods `mc`, `rfta`, `rfta_paper`).
+pub(crate) fn read_reference(path: &Path) -> Reference {
+    let mut map = Reference::new();
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return map;
+    };
+    let mut lines = text.lines();
+    let Some(header) = lines.next() else {
+        return map;
+    };
+    let cols: Vec<&str> = header.split(',').collect();
+    let col = |n: &str| cols.iter().position(|c| *c == n);
+    let (Some(m), Some(nn), Some(me), Some(ch), Some(ha), Some(es), Some(cpu), Some(st)) = (
+        col("mesh"),
+        col("n"),
+        col("method"),
+        col("chamfer"),
+        col("hausdorff"),
+        col("sdf_energy"),
+        col("cpu_seconds"),
+        col("status"),
+    ) else {
+        return map;
+    };
+    for l in lines {
+        let r: Vec<&str> = l.split(',').collect();
+        if r.len() < cols.len() || r[st] != "ok" {
+            continue;
+        }
+        let num = |i: usize| r[i].parse::<f64>().unwrap_or(f64::NAN);
+        let method = r[me].replace('_', "-");
+        if let Ok(n) = r[nn].parse() {
+            map.insert(
+                (r[m].to_string(), n, method),
+                (num(ch), num(ha), num(es), num(cpu)),
+            );
+        }
+    }
+    map
+}
+
+pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
+    let mut s = String::from(
+        "shape,n,method,seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,status\n",
+    );
+    for r in rows {
+        let g = |v: Option<i64>| v.map(|g| g.to_string()).unwrap_or_default();
+        writeln!(
+            s,
+            "{},{},{},{:.6},{:.6},{:.6},{:.6},{},{},{},{},{}",
+            r.shape,
+            r.n,
+            r.method,
+            r.seconds,
+            r.chamfer,
+            r.hausdorff,
+            r.e_sdf,
+            r.watertight,
+            g(r.genus),
+            g(r.gt_genus),
+            r.components,
+            r.status.replace(',', ";")
+        )?;
+    }
+    rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
+    Ok(())
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> Option<(f64, usize)> {
+    let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    (!v.is_empty()).then(|| (v.iter().sum::<f64>() / v.len() as f64, v.len()))
+}
+
+fn fmt(m: Option<(f64, usize)>, total: usize) -> String {
+    match m {
+        Some((v, k)) if k == total => format!("{v:.5}"),
+        Some((v, k)) => format!("{v:.5} ({k}/{total})"),
+        None => "n/a".into(),
+    }
+}
+
+/// A UTC calendar date from the system clock (days-from-civil inverse, Hinnant's algorithm).
+fn today() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let z = (secs / 86_400) as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    format!("{:04}-{m:02}-{d:02}", yoe + era * 400 + i64::from(m <= 2))
+}
+
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    format!("{cpu}, {cores} threads")
+}
+
+pub(crate) fn write_markdown(
+    path: &Path,
+    rows: &[Row],
+    reference: &Reference,
+    res: &[usize],
+    methods: &[String],
+    samples: usize,
+) -> Result<()> {
+    let mut s = String::new();
+    writeln!(s, "# rfta evaluation\n")?;
+    writeln!(
+        s,
+        "Date: {}. Machine: {}. Chamfer with {samples} samples per side.",
+        today(),
+        machine()
+    )?;
+    writeln!(
+        s,
+        "Metrics as the paper defines them (`rfta-metrics`); reference columns are the shared data's results (libigl marching cubes, gpytoolbox `reach_for_the_arcs`) on the same inputs.\n"
+    )?;
+    type Subset = (&'static str, fn(&Row) -> bool);
+    let subsets: [Subset; 3] = [
+        ("all shapes", |_| true),
+        ("genus 0", |r| r.gt_genus == Some(0)),
+        ("genus > 0", |r| r.gt_genus.is_some_and(|g| g > 0)),
+    ];
+    for (metric, pick, ref_pick) in [
+        (
+            "Chamfer",
+            (|r: &Row| r.chamfer) as fn(&Row) -> f64,
+            (|v: &(f64, f64, f64, f64)| v.0) as fn(&(f64, f64, f64, f64)) -> f64,
+        ),
+        (
+            "Hausdorff",
+            |r: &Row| r.hausdorff,
+            |v: &(f64, f64, f64, f64)| v.1,
+        ),
+        ("E_SDF", |r: &Row| r.e_sdf, |v: &(f64, f64, f64, f64)| v.2),
+    ] {
+        writeln!(s, "## Mean {metric}\n")?;
+        for (subset, keep) in subsets {
+            writeln!(s, "{subset}:\n")?;
+            let mut head = String::from("| N |");
+            let mut rule = String::from("|---|");
+            for m in methods {
+                write!(head, " {m} | reference {m} |")?;
+                rule.push_str("---|---|");
+            }
+            writeln!(s, "{head}\n{rule}")?;
+            for &n in res {
+                let mut line = format!("| {n} |");
+                for m in methods {
+                    let sel: Vec<&Row> = rows
+                        .iter()
+                        .filter(|r| r.n == n && &r.method == m && keep(r))
+                        .collect();
+                    let ours = mean(sel.iter().map(|r| pick(r)));
+                    let theirs = mean(sel.iter().filter_map(|r| {
+                        reference
+                            .get(&(r.shape.clone(), n, m.clone()))
+                            .map(ref_pick)
+                    }));
+                    write!(
+                        line,
+                        " {} | {} |",
+                        fmt(ours, sel.len()),
+                        fmt(theirs, sel.len())
+                    )?;
+                }
+                writeln!(s, "{line}")?;
+            }
+            writeln!(s)?;
+        }
+    }
+    writeln!(s, "## Time\n")?;
+    writeln!(
+        s,
+        "Mean wall seconds per shape (reference: CPU seconds on a shared 2-core machine).\n"
+    )?;
+    writeln!(
+        s,
+        "| N | method | seconds | reference | ratio to mc |\n|---|---|---|---|---|"
+    )?;
+    for &n in res {
+        let mc = mean(
+            rows.iter()
+                .filter(|r| r.n == n && r.method == "mc" && r.status == "ok")
+                .map(|r| r.seconds),
+        );
+        for m in methods {
+            let sel: Vec<&Row> = rows
+                .iter()
+                .filter(|r| r.n == n && &r.method == m && r.status == "ok")
+                .collect();
+            let t = mean(sel.iter().map(|r| r.seconds));
+            let rt = mean(
+                rows.iter()
+                    .filter(|r| r.n == n && &r.method == m)
+                    .filter_map(|r| reference.get(&(r.shape.clone(), n, m.clone())).map(|v| v.3)),
+            );
+            let ratio = match (t, mc) {
+                (Some((a, _)), Some((b, _))) if b > 0.0 => format!("{:.1}", a / b),
+                _ => "n/a".into(),
+            };
+            writeln!(
+                s,
+                "| {n} | {m} | {} | {} | {ratio} |",
+                fmt(t, sel.len().max(1)),
+                fmt(rt, 1).split(' ').next().unwrap_or("n/a")
+            )?;
+        }
+    }
+    writeln!(s, "\n## Per shape\n")?;
+    writeln!(
+        s,
+        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | status |"
+    )?;
+    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+    for r in rows {
+        let refc = reference
+            .get(&(r.shape.clone(), r.n, r.method.clone()))
+            .map(|v| format!("{:.5}", v.0))
+            .unwrap_or_else(|| "n/a".into());
+        let g = r.genus.map(|g| g.to_string()).unwrap_or_else(|| "-".into());
+        let gt = r
+            .gt_genus
+            .map(|g| g.to_string())
+            .unwrap_or_else(|| "-".into());
+        writeln!(
+            s,
+            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} |",
+            r.shape,
+            r.n,
+            r.method,
+            r.seconds,
+            r.chamfer,
+            r.hausdorff,
+            r.e_sdf,
+            r.watertight,
+            r.components,
+            r.status
+        )?;
+    }
+    writeln!(
+        s,
+        "\n`contact_sheet.png`: one row per shape, the ground truth first, then each method's output by resolution."
+    )?;
+    rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
+    Ok(())
+}
+
+/// Mean Chamfer against N per method (solid) and reference (dashed), log scale.
+pub(crate) fn write_svg(
+    path: &Path,
+    rows: &[Row],
+    reference: &Reference,
+    res: &[usize],
+    methods: &[String],
+) -> Result<()> {
+    let (w, h, left, right, top, bottom) = (640.0, 400.0, 70.0, 170.0, 30.0, 50.0);
+    // (label, dashed, points)
+    type Series = (String, bool, Vec<(usize, f64)>);
+    let mut series: Vec<Series> = Vec::new();
+    for m in methods {
+        let ours: Vec<(usize, f64)> = res
+            .iter()
+            .filter_map(|&n| {
+                mean(
+                    rows.iter()
+                        .filter(|r| r.n == n && &r.method == m)
+                        .map(|r| r.chamfer),
+                )
+                .map(|(v, _)| (n, v))
+            })
+            .collect();
+        let theirs: Vec<(usize, f64)> = res
+            .iter()
+            .filter_map(|&n| {
+                mean(
+                    rows.iter()
+                        .filter(|r| r.n == n && &r.method == m)
+                        .filter_map(|r| {
+                            reference.get(&(r.shape.clone(), n, m.clone())).map(|v| v.0)
+                        }),
+                )
+                .map(|(v, _)| (n, v))
+            })
+            .collect();
+        series.push((m.clone(), false, ours));
+        series.push((format!("reference {m}"), true, theirs));
+    }
+    let all: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.2.iter().map(|p| p.1))
+        .filter(|v| *v > 0.0)
+        .collect();
+    let (lo, hi) = all
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v.log10()), b.max(v.log10()))
+        });
+    let (lo, hi) = if lo.is_finite() {
+        (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
+    } else {
+        (-3.0, 0.0)
+    };
+    let (nlo, nhi) = (
+        *res.iter().min().unwrap_or(&0) as f64,
+        *res.iter().max().unwrap_or(&1) as f64,
+    );
+    let x = |n: f64| {
+        left + (w - left - right)
+            * if nhi > nlo {
+                (n - nlo) / (nhi - nlo)
+            } else {
+                0.5
+            }
+    };
+    let y = |v: f64| top + (h - top - bottom) * (hi - v.log10()) / (hi - lo);
+    let colors = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
+    ];
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    );
+    writeln!(
+        s,
+        "<text x=\"{}\" y=\"18\" text-anchor=\"middle\">Mean Chamfer vs N (log scale)</text>",
+        (left + w - right) / 2.0
+    )?;
+    for e in (lo as i64)..=(hi as i64) {
+        let yy = y(10f64.powi(e as i32));
+        writeln!(
+            s,
+            "<line x1=\"{left}\" x2=\"{}\" y1=\"{yy}\" y2=\"{yy}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">1e{e}</text>",
+            w - right,
+            left - 6.0,
+            yy + 4.0
+        )?;
+    }
+    for &n in res {
+        writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{n}</text>",
+            x(n as f64),
+            h - bottom + 18.0
+        )?;
+    }
+    writeln!(
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">N (grid cells per axis)</text>",
+        (left + w - right) / 2.0,
+        h - 10.0
+    )?;
+    for (i, (label, dashed, pts)) in series.iter().enumerate() {
+        let color = colors[(i / 2) % colors.len()];
+        let dash = if *dashed {
+            " stroke-dasharray=\"6 4\""
+        } else {
+            ""
+        };
+        let path: Vec<String> = pts
+            .iter()
+            .map(|(n, v)| format!("{:.1},{:.1}", x(*n as f64), y(*v)))
+            .collect();
+        if !path.is_empty() {
+            writeln!(
+                s,
+                "<polyline points=\"{}\" fill=\"none\" stroke=\"{color}\" stroke-width=\"2\"{dash}/>",
+                path.join(" ")
+            )?;
+        }
+        let ly = top + 20.0 * i as f64;
+        writeln!(
+            s,
+            "<line x1=\"{}\" x2=\"{}\" y1=\"{ly}\" y2=\"{ly}\" stroke=\"{color}\" stroke-width=\"2\"{dash}/><text x=\"{}\" y=\"{}\">{label}</text>",
+            w - right + 10.0,
+            w - right + 35.0,
+            w - right + 40.0,
+            ly + 4.0
+        )?;
+    }
+    s.push_str("</svg>\n");
+    rfta_io::write_atomic(path, |wr| wr.write_all(s.as_bytes()))?;
+    Ok(())
+}
