@@ -40,8 +40,8 @@ fn bench(c: &mut Criterion) {
     for (name, centers, radii) in sign_sets() {
         for res in [128, 256, 512] {
             for (label, backend) in backends {
-                // lavapipe (software Vulkan) needs minutes for the outside set; on a real GPU set
-                // RFTA_BENCH_GPU_ALL=1 to include it.
+                // lavapipe (software Vulkan) needs 13-43 s per outside-set run (10 samples each);
+                // on a real GPU set RFTA_BENCH_GPU_ALL=1 to include it, or use examples/raster_timing.
                 if *label == "gpu"
                     && name == "outside"
                     && std::env::var_os("RFTA_BENCH_GPU_ALL").is_none()

@@ -21,15 +21,23 @@ struct Params {
     seed: u32,
     n_spheres: u32,
     sphere_offset: u32,
-    pad: [u32; 3],
+    n_blocks: u32,
+    block_words_per_column: u32,
+    pad: u32,
 }
+
+/// Cells per block side (as cpu.rs and the shader).
+const BLOCK: usize = 8;
 
 /// A wgpu device with the rasterization pipeline compiled.
 #[derive(Debug)]
 pub struct GpuRasterizer {
     device: wgpu::Device,
     queue: wgpu::Queue,
-    pipeline: wgpu::ComputePipeline,
+    /// The three passes: cover blocks, rasterize uncovered blocks, fill covered blocks.
+    cover: wgpu::ComputePipeline,
+    raster: wgpu::ComputePipeline,
+    fill: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     adapter_info: wgpu::AdapterInfo,
     /// Errors wgpu reported asynchronously (its default handler would panic).
@@ -85,6 +93,7 @@ impl GpuRasterizer {
                 entry(0, wgpu::BufferBindingType::Uniform),
                 entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
                 entry(2, wgpu::BufferBindingType::Storage { read_only: false }),
+                entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -92,18 +101,27 @@ impl GpuRasterizer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("raster_spheres.wgsl"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("raster_spheres"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let (cover, raster, fill) = (
+            pipeline("cover_blocks"),
+            pipeline("raster_spheres"),
+            pipeline("fill_covered"),
+        );
         let gpu = Self {
             device,
             queue,
-            pipeline,
+            cover,
+            raster,
+            fill,
             layout,
             adapter_info: adapter.get_info(),
             errors,
@@ -186,16 +204,36 @@ impl GpuRasterizer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        // The widest candidate x range sets the dispatch's second dimension.
-        let max_x = spheres
-            .iter()
-            .filter(|s| s.lo[0] <= s.hi[0])
-            .map(|s| s.hi[0] - s.lo[0] + 1)
+        let n_blocks = res.div_ceil(BLOCK);
+        let block_words = n_blocks.div_ceil(32);
+        let covered_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("covered blocks"),
+            size: (n_blocks * n_blocks * block_words * 4).max(4) as u64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        // The widest candidate x range in blocks sets the dispatches' second dimension.
+        let live = || {
+            spheres
+                .iter()
+                .filter(|s| s.lo.iter().zip(&s.hi).all(|(l, h)| l <= h))
+        };
+        let block = BLOCK as u32;
+        let max_bx = live()
+            .map(|s| s.hi[0] / block - s.lo[0] / block + 1)
             .max()
             .unwrap_or(0);
         let per_dispatch = limits.max_compute_workgroups_per_dimension.min(65_535) * WORKGROUP;
+        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
+        }
+        // One bind group per chunk of spheres (the chunk's offset is in its parameters).
+        let mut binds = Vec::new();
         let mut offset = 0u32;
-        while (offset as usize) < spheres.len() && max_x > 0 {
+        while (offset as usize) < spheres.len() {
             let n = (spheres.len() as u32 - offset).min(per_dispatch);
             let p = Params {
                 res: res as u32,
@@ -203,7 +241,9 @@ impl GpuRasterizer {
                 seed: seed32(params.seed),
                 n_spheres: spheres.len() as u32,
                 sphere_offset: offset,
-                pad: [0; 3],
+                n_blocks: n_blocks as u32,
+                block_words_per_column: block_words as u32,
+                pad: 0,
             };
             let param_buf = self
                 .device
@@ -212,41 +252,47 @@ impl GpuRasterizer {
                     contents: bytemuck::bytes_of(&p),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
+
             let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("raster_spheres"),
                 layout: &self.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: param_buf.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: sphere_buf.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: occ_buf.as_entire_binding(),
-                    },
+                    entry(0, &param_buf),
+                    entry(1, &sphere_buf),
+                    entry(2, &occ_buf),
+                    entry(3, &covered_buf),
                 ],
             });
-            let mut encoder = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("raster"),
-                });
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("raster"),
-                    timestamp_writes: None,
-                });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(n.div_ceil(WORKGROUP), max_x, 1);
-            }
-            self.queue.submit([encoder.finish()]);
+            binds.push((bind, n));
             offset += n;
         }
+        // Separate passes order the phases: every cover write lands before any raster read, and
+        // every raster write before the fill.
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("raster"),
+            });
+        let pass_desc = wgpu::ComputePassDescriptor {
+            label: Some("raster"),
+            timestamp_writes: None,
+        };
+        for (pipeline, y) in [(&self.cover, max_bx), (&self.raster, max_bx)] {
+            for (bind, n) in binds.iter().filter(|_| y > 0) {
+                let mut pass = encoder.begin_compute_pass(&pass_desc);
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind, &[]);
+                pass.dispatch_workgroups(n.div_ceil(WORKGROUP), y, 1);
+            }
+        }
+        if let Some((bind, _)) = binds.first() {
+            let mut pass = encoder.begin_compute_pass(&pass_desc);
+            pass.set_pipeline(&self.fill);
+            pass.set_bind_group(0, bind, &[]);
+            let groups = (res as u32).div_ceil(8);
+            pass.dispatch_workgroups(groups, groups, 1);
+        }
+        self.queue.submit([encoder.finish()]);
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
