@@ -113,21 +113,34 @@ fn load_sphere(s: u32) -> QSphere {
     );
 }
 
+// The work item of an invocation of the block passes: sphere gid.x (plus the chunk's offset) and
+// its gid.y-th x slab of blocks; ok is false when there is none.
+struct BlockSlab {
+    q: QSphere,
+    bx: u32,
+    ok: bool,
+}
+
+fn block_slab(gid: vec3<u32>) -> BlockSlab {
+    let s = gid.x + params.sphere_offset;
+    if (s >= params.n_spheres) {
+        return BlockSlab(QSphere(vec3<i32>(0), 0u, vec3<u32>(1u), vec3<u32>(0u)), 0u, false);
+    }
+    let q = load_sphere(s);
+    let bx = q.lo.x / BLOCK + gid.y;
+    let ok = q.lo.x <= q.hi.x && q.lo.y <= q.hi.y && q.lo.z <= q.hi.z && bx <= q.hi.x / BLOCK;
+    return BlockSlab(q, bx, ok);
+}
+
 // Pass 1: per (sphere, x column of blocks), the run of z blocks whose every lattice point is inside.
 @compute @workgroup_size(64, 1, 1)
 fn cover_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = gid.x + params.sphere_offset;
-    if (s >= params.n_spheres) {
+    let slab = block_slab(gid);
+    if (!slab.ok) {
         return;
     }
-    let q = load_sphere(s);
-    if (q.lo.x > q.hi.x || q.lo.y > q.hi.y || q.lo.z > q.hi.z) {
-        return;
-    }
-    let bx = q.lo.x / BLOCK + gid.y;
-    if (bx > q.hi.x / BLOCK) {
-        return;
-    }
+    let q = slab.q;
+    let bx = slab.bx;
     let res = params.res;
     let fx = far_range(bx * BLOCK, min((bx + 1u) * BLOCK, res) - 1u, q.c.x);
     if (fx > q.r2) {
@@ -250,18 +263,12 @@ fn raster_column(q: QSphere, ix: u32, iy: u32, z0_in: u32, z1_in: u32) {
 // Pass 2: per (sphere, x slab of blocks), the cells of the blocks it reaches that no sphere covers.
 @compute @workgroup_size(64, 1, 1)
 fn raster_spheres(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = gid.x + params.sphere_offset;
-    if (s >= params.n_spheres) {
+    let slab = block_slab(gid);
+    if (!slab.ok) {
         return;
     }
-    let q = load_sphere(s);
-    if (q.lo.x > q.hi.x || q.lo.y > q.hi.y || q.lo.z > q.hi.z) {
-        return;
-    }
-    let bx = q.lo.x / BLOCK + gid.y;
-    if (bx > q.hi.x / BLOCK) {
-        return;
-    }
+    let q = slab.q;
+    let bx = slab.bx;
     let x0 = max(q.lo.x, bx * BLOCK);
     let x1 = min(q.hi.x, bx * BLOCK + BLOCK - 1u);
     let nx = near_range(x0, x1, q.c.x);

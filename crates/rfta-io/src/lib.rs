@@ -78,10 +78,7 @@ impl MeshFormat {
     /// # Errors
     /// [`Error::UnknownFormat`] for a missing or unsupported extension.
     pub fn from_path(path: &Path) -> Result<Self> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+        let ext = extension(path);
         match ext.as_deref() {
             Some("obj") => Ok(Self::Obj),
             Some("off") => Ok(Self::Off),
@@ -138,6 +135,13 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
             expected: "a writable mesh: .obj, .ply, .stl, .glb",
         }),
     }
+}
+
+/// The file's extension in lower case, if it has one.
+pub(crate) fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
 }
 
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {

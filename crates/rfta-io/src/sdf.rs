@@ -6,7 +6,7 @@ use rfta_geom::{Grid, Layout, OrientedPoints, SdfSamples, glam::DVec3};
 
 use crate::error::{ParseError, ParseResult};
 use crate::text::{as_text, content_lines};
-use crate::{Error, Result, exr_volume, npy, ply, read_bytes, write_atomic};
+use crate::{Error, Result, exr_volume, extension, npy, ply, read_bytes, write_atomic};
 
 /// The corner sample positions of a grid: sample `(0, 0, 0)` at `min`, the last at `max`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,10 +93,7 @@ impl RawSdf {
 /// # Errors
 /// [`Error::Io`], [`Error::Parse`] naming the file and the problem, [`Error::UnknownFormat`].
 pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
+    let ext = extension(path);
     let bytes = read_bytes(path)?;
     let at = |e: ParseError| e.at(path);
     match ext.as_deref() {
@@ -280,10 +277,7 @@ fn parse_rows(bytes: &[u8]) -> ParseResult<(Vec<DVec3>, Vec<f64>)> {
 /// # Errors
 /// [`Error::UnknownFormat`] for other extensions, [`Error::Io`] if writing fails.
 pub fn write_sdf_grid(path: &Path, grid: &Grid, values: &[f64]) -> Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
+    let ext = extension(path);
     match ext.as_deref() {
         Some("npy") => {
             let dims = grid.dims();
@@ -321,10 +315,7 @@ pub fn write_sdf_grid(path: &Path, grid: &Grid, values: &[f64]) -> Result<()> {
 /// [`Error::Io`], [`Error::Parse`], [`Error::UnknownFormat`], or [`Error::Geom`] for NaN
 /// positions or zero normals.
 pub fn read_oriented_points(path: &Path) -> Result<OrientedPoints> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
+    let ext = extension(path);
     let bytes = read_bytes(path)?;
     let at = |e: ParseError| e.at(path);
     let (positions, normals) = match ext.as_deref() {

@@ -323,3 +323,48 @@ impl GpuRasterizer {
         Ok(Some(BitGrid::from_words(res, words)))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::Params;
+
+    /// The Rust `Params` and the shader's `Params` have the same size and member offsets, as naga
+    /// lays the WGSL struct out.
+    #[test]
+    fn params_layout_matches_the_shader() {
+        let module =
+            naga::front::wgsl::parse_str(crate::shaders::RASTER_SPHERES).expect("valid WGSL");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("layout");
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Params"))
+            .expect("the shader declares Params");
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("Params is a struct")
+        };
+        assert_eq!(*span as usize, size_of::<Params>());
+        assert_eq!(layouter[handle].size as usize, size_of::<Params>());
+        let rust = [
+            ("res", offset_of!(Params, res)),
+            ("words_per_column", offset_of!(Params, words_per_column)),
+            ("seed", offset_of!(Params, seed)),
+            ("n_spheres", offset_of!(Params, n_spheres)),
+            ("sphere_offset", offset_of!(Params, sphere_offset)),
+            ("n_blocks", offset_of!(Params, n_blocks)),
+            (
+                "block_words_per_column",
+                offset_of!(Params, block_words_per_column),
+            ),
+            ("pad", offset_of!(Params, pad)),
+        ];
+        assert_eq!(members.len(), rust.len());
+        for (m, (name, offset)) in members.iter().zip(rust) {
+            assert_eq!(m.name.as_deref(), Some(name));
+            assert_eq!(m.offset as usize, offset, "{name}");
+        }
+    }
+}

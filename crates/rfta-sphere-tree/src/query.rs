@@ -26,12 +26,8 @@ impl SphereTree {
             }
             let node = &self.nodes[idx as usize];
             if node.leaf {
-                for s in node.a as usize..(node.a + node.b) as usize {
-                    if Some(self.ids[s]) != ignore
-                        && (x - self.centers[s]).length() - self.radii[s] < threshold
-                    {
-                        return true;
-                    }
+                if self.leaf_hit(node, x, threshold, ignore) {
+                    return true;
                 }
             } else {
                 push_ordered(&mut stack, &self.nodes, node, x);
@@ -120,12 +116,8 @@ impl SphereTree {
                 continue;
             }
             if node.leaf {
-                for s in node.a as usize..(node.a + node.b) as usize {
-                    if Some(self.ids[s]) != ignore
-                        && (x - self.centers[s]).length() - self.radii[s] < threshold
-                    {
-                        return true;
-                    }
+                if self.leaf_hit(node, x, threshold, ignore) {
+                    return true;
                 }
             } else {
                 stack.push(node.b);
@@ -133,6 +125,16 @@ impl SphereTree {
             }
         }
         false
+    }
+}
+
+impl SphereTree {
+    /// Whether a sphere of leaf `node`, other than `ignore`, has signed distance below `threshold` at `x`.
+    fn leaf_hit(&self, node: &Node, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
+        (node.a as usize..(node.a + node.b) as usize).any(|s| {
+            Some(self.ids[s]) != ignore
+                && (x - self.centers[s]).length() - self.radii[s] < threshold
+        })
     }
 }
 
