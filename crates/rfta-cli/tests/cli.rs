@@ -197,3 +197,29 @@ fn errors_are_one_clear_line_with_nonzero_status() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn sample_is_byte_identical_at_any_thread_count() {
+    let dir = temp("threads");
+    let out = |t: &str| {
+        let path = dir.join(format!("t{t}.npy"));
+        let o = rfta(&[
+            "-q",
+            "--threads",
+            t,
+            "sample",
+            "--shape",
+            "torus",
+            "--res",
+            "16",
+            "-o",
+            s(&path),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(&path).expect("grid written")
+    };
+    let one = out("1");
+    assert_eq!(one, out("2"));
+    assert_eq!(one, out("3"));
+    let _ = std::fs::remove_dir_all(dir);
+}

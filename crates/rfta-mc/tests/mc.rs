@@ -110,3 +110,24 @@ fn degenerate_grids_give_empty_meshes() {
     assert!(marching_cubes(&grid, &vec![1.0; grid.len()], 0.0).is_empty());
     assert!(marching_cubes(&grid, &vec![-1.0; grid.len()], 0.0).is_empty());
 }
+
+#[test]
+fn same_mesh_at_any_thread_count() {
+    let (grid, values) = sample(
+        Analytic::Torus {
+            major: 0.6,
+            minor: 0.25,
+        },
+        37,
+    );
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| marching_cubes(&grid, &values, 0.0))
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(4));
+}
