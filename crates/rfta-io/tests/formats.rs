@@ -139,7 +139,7 @@ fn malformed_meshes_get_clear_errors() {
         ("n.ply", b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n", "truncated: element 'vertex' has 1 of 2 records"),
         ("o.stl", &[0u8; 100], "announces 0 triangles"),
         ("p.stl", b"solid x\nfacet\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n", "not closed"),
-        ("q.glb", b"glTF\x02\0\0\0garbage", "invalid glTF"),
+        ("q.glb", b"glTF\x02\0\0\0garbage", "truncated GLB"),
         ("r.xyz", b"0 0 0", "unsupported file type"),
     ];
     for (name, bytes, needle) in cases {
@@ -336,4 +336,192 @@ fn oriented_points_round_trip() {
     assert_eq!(rfta_io::read_oriented_points(&p).expect("read"), pts);
     let xyz = dir.write("p.xyz", b"0 0 0 1 0 0\n1 1 1 0 0 0\n");
     assert!(err_text(rfta_io::read_oriented_points(&xyz)).contains("normal 1 has zero"));
+}
+
+/// Seeded random corruptions of valid files (byte flips, insertions, deletions, overwritten
+/// counts) must give an error or a valid result, never a panic: a cheap stand-in for fuzzing that
+/// runs in every test run.
+#[test]
+fn mutated_files_never_panic() {
+    use rfta_geom::rng::Rng;
+    let dir = TempDir::new("mutated");
+    let mesh = shapes::icosphere(1.0, 1);
+    let grid = Grid::cube(3, -1.0, 1.0).expect("grid");
+    let values: Vec<f64> = (0..grid.len())
+        .map(|i| grid.position(i).length() - 0.5)
+        .collect();
+    let mut originals: Vec<(String, Vec<u8>)> = Vec::new();
+    for name in ["m.obj", "m.ply", "m.stl", "m.glb"] {
+        let p = dir.path(&format!("orig-{name}"));
+        write_mesh(&p, &mesh).expect("write");
+        originals.push((name.to_string(), std::fs::read(&p).expect("read")));
+    }
+    for name in ["g.npy", "g.exr"] {
+        let p = dir.path(&format!("orig-{name}"));
+        write_sdf_grid(&p, &grid, &values).expect("write");
+        originals.push((name.to_string(), std::fs::read(&p).expect("read")));
+    }
+    let mut off = format!("OFF\n{} {} 0\n", mesh.n_vertices(), mesh.n_faces());
+    mesh.vertices
+        .iter()
+        .for_each(|v| off += &format!("{} {} {}\n", v.x, v.y, v.z));
+    mesh.faces
+        .iter()
+        .for_each(|f| off += &format!("3 {} {} {}\n", f[0], f[1], f[2]));
+    originals.push(("m.off".into(), off.into_bytes()));
+    originals.push((
+        "s.csv".into(),
+        b"x,y,z,s\n0,0,0,-1\n1,1,1,2\n0.5,0.25,0,0.1\n".to_vec(),
+    ));
+    let mut rng = Rng::new(2026);
+    for (name, bytes) in &originals {
+        for _ in 0..300 {
+            let mut b = bytes.clone();
+            for _ in 0..1 + rng.below(4) {
+                let at = rng.below(b.len().max(1) as u64) as usize;
+                match rng.below(4) {
+                    0 if !b.is_empty() => {
+                        let i = at.min(b.len() - 1);
+                        b[i] ^= 1 << rng.below(8);
+                    }
+                    1 => b.insert(at.min(b.len()), rng.below(256) as u8),
+                    2 if !b.is_empty() => {
+                        b.remove(at.min(b.len() - 1));
+                    }
+                    _ => {
+                        // Overwrite four bytes with an extreme count (0xFF.. or a large ASCII number).
+                        let junk: &[u8] = if rng.below(2) == 0 {
+                            &[0xFF; 4]
+                        } else {
+                            b"9999"
+                        };
+                        for (k, j) in junk.iter().enumerate() {
+                            if let Some(x) = b.get_mut(at + k) {
+                                *x = *j;
+                            }
+                        }
+                    }
+                }
+            }
+            let p = dir.write(name, &b);
+            if name.ends_with("npy") || name.ends_with("exr") || name.ends_with("csv") {
+                let _ = read_sdf(&p, None).map(|raw| raw.validate(&p));
+            } else {
+                let _ = read_mesh(&p);
+            }
+        }
+    }
+}
+
+/// Our GLB writer's output is valid for an independent implementation (the `gltf` crate, which
+/// validates the document on load) and carries the same mesh.
+#[test]
+fn written_glb_is_valid_gltf() {
+    let dir = TempDir::new("glb-valid");
+    let mesh = shapes::torus(0.6, 0.25, 10, 6);
+    let path = dir.path("t.glb");
+    write_mesh(&path, &mesh).expect("write");
+    let bytes = std::fs::read(&path).expect("read");
+    let g = gltf::Gltf::from_slice(&bytes).expect("valid glTF");
+    let prim = g
+        .meshes()
+        .next()
+        .and_then(|m| m.primitives().next())
+        .expect("one primitive");
+    let reader = prim.reader(|_| g.blob.as_deref());
+    let positions: Vec<[f32; 3]> = reader.read_positions().expect("positions").collect();
+    let indices: Vec<u32> = reader.read_indices().expect("indices").into_u32().collect();
+    assert_eq!(positions.len(), mesh.n_vertices());
+    assert_eq!(
+        indices,
+        mesh.faces.iter().flatten().copied().collect::<Vec<_>>()
+    );
+    for (p, v) in positions.iter().zip(&mesh.vertices) {
+        assert_eq!(*p, v.as_vec3().to_array());
+    }
+}
+
+/// Regression: a GLB whose primitive names a missing accessor made the `gltf` crate panic (found
+/// by `mutated_files_never_panic`); our reader reports it.
+#[test]
+fn glb_with_a_missing_accessor_is_an_error() {
+    let dir = TempDir::new("glb-missing");
+    let path = dir.path("m.glb");
+    write_mesh(&path, &shapes::octahedron(1.0)).expect("write");
+    let bytes = std::fs::read(&path).expect("read");
+    let text = String::from_utf8_lossy(&bytes).into_owned();
+    assert!(
+        text.contains("\"POSITION\":0"),
+        "the writer's JSON names accessor 0 for POSITION"
+    );
+    // Same length, so the chunk sizes stay right: accessor 0 becomes accessor 7.
+    let bad = bytes
+        .windows(12)
+        .position(|w| w == b"\"POSITION\":0")
+        .expect("found");
+    let mut corrupted = bytes.clone();
+    corrupted[bad + 11] = b'7';
+    let msg = err_text(read_mesh(&dir.write("bad.glb", &corrupted)));
+    assert!(msg.contains("accessors[7] does not exist"), "{msg}");
+}
+
+/// A GLB from a JSON document and a BIN chunk, assembled per the glTF 2.0 container layout.
+fn assemble_glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut j = json.as_bytes().to_vec();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let mut b = bin.to_vec();
+    while b.len() % 4 != 0 {
+        b.push(0);
+    }
+    let total = (12 + 8 + j.len() + 8 + b.len()) as u32;
+    let mut out = Vec::new();
+    for w in [0x4654_6C67u32, 2, total, j.len() as u32, 0x4E4F_534A] {
+        out.extend_from_slice(&w.to_le_bytes());
+    }
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(b.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+    out.extend_from_slice(&b);
+    out
+}
+
+#[test]
+fn glb_node_transforms_are_applied() {
+    let dir = TempDir::new("glb-trs");
+    // One triangle (0,0,0) (1,0,0) (0,1,0), no index accessor; a parent node translates by (0,0,5)
+    // and its child rotates 90 degrees about z (quaternion (0,0,sin 45,cos 45)) and scales by 2.
+    let mut bin = Vec::new();
+    for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"translation":[0,0,5],"children":[1]}},{{"mesh":0,"rotation":[0,0,{h},{h}],"scale":[2,2,2]}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+        "buffers":[{{"byteLength":36}}],"bufferViews":[{{"buffer":0,"byteLength":36}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
+    );
+    let mesh = read_mesh(&dir.write("t.glb", &assemble_glb(&json, &bin))).expect("valid GLB");
+    assert_eq!(mesh.faces, vec![[0, 1, 2]]);
+    // x -> y and y -> -x under the rotation, times 2, then up by 5.
+    let expected = [
+        DVec3::new(0.0, 0.0, 5.0),
+        DVec3::new(0.0, 2.0, 5.0),
+        DVec3::new(-2.0, 0.0, 5.0),
+    ];
+    for (v, e) in mesh.vertices.iter().zip(expected) {
+        assert!(v.distance(e) < 1e-12, "{v} vs {e}");
+    }
+    // A node cycle is an error, not a hang.
+    let cyclic = json.replace(
+        r#""children":[1]},{"mesh":0"#,
+        r#""children":[1]},{"children":[0],"mesh":0"#,
+    );
+    assert_ne!(cyclic, json);
+    assert!(
+        err_text(read_mesh(&dir.write("c.glb", &assemble_glb(&cyclic, &bin)))).contains("cycle")
+    );
 }
