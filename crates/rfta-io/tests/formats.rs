@@ -468,11 +468,11 @@ fn glb_with_a_missing_accessor_is_an_error() {
 /// A GLB from a JSON document and a BIN chunk, assembled per the glTF 2.0 container layout.
 fn assemble_glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let mut j = json.as_bytes().to_vec();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = (12 + 8 + j.len() + 8 + b.len()) as u32;
