@@ -172,25 +172,31 @@ fn every_prefix_is_safe(
     n_errors
 }
 
-#[test]
-fn truncated_files_never_panic() {
-    let dir = TempDir::new("truncated");
+/// One valid file of every readable format, with whether it is a binary format whose counts make
+/// every strict prefix invalid.
+fn valid_files(dir: &TempDir) -> Vec<(String, Vec<u8>, bool)> {
     let mesh = shapes::icosphere(1.0, 1);
-    for name in ["t.obj", "t.ply", "t.stl", "t.glb"] {
-        let full = dir.path(&format!("full-{name}"));
-        write_mesh(&full, &mesh).expect("write");
-        let bytes = std::fs::read(&full).expect("read back");
-        let n_err = every_prefix_is_safe(&dir, name, &bytes, |p| read_mesh(p).map(|_| ()));
-        // Binary formats carry counts: every strict prefix is an error.
-        if !name.ends_with("obj") {
-            assert_eq!(
-                n_err,
-                bytes.len().div_ceil((bytes.len() / 300).max(1)),
-                "{name}"
-            );
-        }
+    let grid = Grid::cube(4, -1.0, 1.0).expect("grid");
+    let values: Vec<f64> = (0..grid.len())
+        .map(|i| grid.position(i).length() - 0.5)
+        .collect();
+    let mut files = Vec::new();
+    for (name, binary) in [
+        ("m.obj", false),
+        ("m.ply", true),
+        ("m.stl", true),
+        ("m.glb", true),
+    ] {
+        let p = dir.path(&format!("orig-{name}"));
+        write_mesh(&p, &mesh).expect("write");
+        files.push((name.to_string(), std::fs::read(&p).expect("read"), binary));
     }
-    // OFF (read-only): build the text by hand.
+    for name in ["g.npy", "g.exr"] {
+        let p = dir.path(&format!("orig-{name}"));
+        write_sdf_grid(&p, &grid, &values).expect("write");
+        files.push((name.to_string(), std::fs::read(&p).expect("read"), true));
+    }
+    // OFF is read-only: the text by hand.
     let mut off = format!("OFF\n{} {} 0\n", mesh.n_vertices(), mesh.n_faces());
     mesh.vertices
         .iter()
@@ -198,22 +204,38 @@ fn truncated_files_never_panic() {
     mesh.faces
         .iter()
         .for_each(|f| off += &format!("3 {} {} {}\n", f[0], f[1], f[2]));
-    every_prefix_is_safe(&dir, "t.off", off.as_bytes(), |p| read_mesh(p).map(|_| ()));
-    // SDF grids.
-    let grid = Grid::cube(4, -1.0, 1.0).expect("grid");
-    let values: Vec<f64> = (0..grid.len())
-        .map(|i| grid.position(i).length() - 0.5)
-        .collect();
-    for name in ["g.npy", "g.exr"] {
-        let full = dir.path(&format!("full-{name}"));
-        write_sdf_grid(&full, &grid, &values).expect("write");
-        let bytes = std::fs::read(&full).expect("read back");
-        let n_err = every_prefix_is_safe(&dir, name, &bytes, |p| read_sdf(p, None).map(|_| ()));
-        assert_eq!(
-            n_err,
-            bytes.len().div_ceil((bytes.len() / 300).max(1)),
-            "{name}"
-        );
+    files.push(("m.off".into(), off.into_bytes(), false));
+    files.push((
+        "s.csv".into(),
+        b"x,y,z,s\n0,0,0,-1\n1,1,1,2\n0.5,0.25,0,0.1\n".to_vec(),
+        false,
+    ));
+    files
+}
+
+/// Reads `path` with the reader its extension selects, validating SDF samples too.
+fn read_any(path: &Path) -> Result<(), Error> {
+    let name = path.to_string_lossy();
+    if name.ends_with("npy") || name.ends_with("exr") || name.ends_with("csv") {
+        read_sdf(path, None)?.validate(path).map(|_| ())
+    } else {
+        read_mesh(path).map(|_| ())
+    }
+}
+
+#[test]
+fn truncated_files_never_panic() {
+    let dir = TempDir::new("truncated");
+    for (name, bytes, binary) in valid_files(&dir) {
+        let n_err = every_prefix_is_safe(&dir, &name, &bytes, read_any);
+        // Binary formats carry counts and sizes: every strict prefix is an error.
+        if binary {
+            assert_eq!(
+                n_err,
+                bytes.len().div_ceil((bytes.len() / 300).max(1)),
+                "{name}"
+            );
+        }
     }
 }
 
@@ -345,36 +367,9 @@ fn oriented_points_round_trip() {
 fn mutated_files_never_panic() {
     use rfta_geom::rng::Rng;
     let dir = TempDir::new("mutated");
-    let mesh = shapes::icosphere(1.0, 1);
-    let grid = Grid::cube(3, -1.0, 1.0).expect("grid");
-    let values: Vec<f64> = (0..grid.len())
-        .map(|i| grid.position(i).length() - 0.5)
-        .collect();
-    let mut originals: Vec<(String, Vec<u8>)> = Vec::new();
-    for name in ["m.obj", "m.ply", "m.stl", "m.glb"] {
-        let p = dir.path(&format!("orig-{name}"));
-        write_mesh(&p, &mesh).expect("write");
-        originals.push((name.to_string(), std::fs::read(&p).expect("read")));
-    }
-    for name in ["g.npy", "g.exr"] {
-        let p = dir.path(&format!("orig-{name}"));
-        write_sdf_grid(&p, &grid, &values).expect("write");
-        originals.push((name.to_string(), std::fs::read(&p).expect("read")));
-    }
-    let mut off = format!("OFF\n{} {} 0\n", mesh.n_vertices(), mesh.n_faces());
-    mesh.vertices
-        .iter()
-        .for_each(|v| off += &format!("{} {} {}\n", v.x, v.y, v.z));
-    mesh.faces
-        .iter()
-        .for_each(|f| off += &format!("3 {} {} {}\n", f[0], f[1], f[2]));
-    originals.push(("m.off".into(), off.into_bytes()));
-    originals.push((
-        "s.csv".into(),
-        b"x,y,z,s\n0,0,0,-1\n1,1,1,2\n0.5,0.25,0,0.1\n".to_vec(),
-    ));
+    let originals = valid_files(&dir);
     let mut rng = Rng::new(2026);
-    for (name, bytes) in &originals {
+    for (name, bytes, _) in &originals {
         for _ in 0..300 {
             let mut b = bytes.clone();
             for _ in 0..1 + rng.below(4) {
@@ -403,12 +398,7 @@ fn mutated_files_never_panic() {
                     }
                 }
             }
-            let p = dir.write(name, &b);
-            if name.ends_with("npy") || name.ends_with("exr") || name.ends_with("csv") {
-                let _ = read_sdf(&p, None).map(|raw| raw.validate(&p));
-            } else {
-                let _ = read_mesh(&p);
-            }
+            let _ = read_any(&dir.write(name, &b));
         }
     }
 }
