@@ -27,7 +27,6 @@ fn random_points(n: usize, seed: u64, half: f64) -> Vec<DVec3> {
 fn test_mesh() -> TriMesh {
     let mut t = shapes::torus(0.6, 0.25, 40, 20);
     let mut rng = Rng::new(3);
-    t.map_vertices(|v| v);
     for v in &mut t.vertices {
         *v += DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 0.01;
     }
