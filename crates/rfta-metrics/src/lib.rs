@@ -10,7 +10,8 @@
 //! - [`MeshSummary`]: counts, watertightness, genus and components.
 //!
 //! All distances are exact point-to-triangle distances ([`rfta_mesh::MeshIndex`]); evaluation is
-//! parallel and deterministic.
+//! parallel and deterministic. The `_indexed` forms take indices the caller already built, so
+//! scoring many reconstructions against one ground truth builds its tree once.
 //!
 //! # Example
 //! ```
@@ -47,7 +48,17 @@ pub fn rms_distance(from: &TriMesh, to: &MeshIndex, n: usize, seed: u64) -> f64 
 /// [`rfta_mesh::Error::EmptyMesh`] if either mesh has no triangles.
 pub fn chamfer(a: &TriMesh, b: &TriMesh, n: usize, seed: u64) -> Result<f64> {
     let (ia, ib) = (MeshIndex::new(a)?, MeshIndex::new(b)?);
-    Ok(rms_distance(a, &ib, n, seed) + rms_distance(b, &ia, n, seed.wrapping_add(1)))
+    Ok(chamfer_indexed((a, &ia), (b, &ib), n, seed))
+}
+
+/// [`chamfer`] with both meshes' indices already built (each mesh paired with its index).
+pub fn chamfer_indexed(
+    a: (&TriMesh, &MeshIndex),
+    b: (&TriMesh, &MeshIndex),
+    n: usize,
+    seed: u64,
+) -> f64 {
+    rms_distance(a.0, b.1, n, seed) + rms_distance(b.0, a.1, n, seed.wrapping_add(1))
 }
 
 /// The larger of the maximum distance from `a`'s vertices to `b` and from `b`'s vertices to `a`.
@@ -56,13 +67,18 @@ pub fn chamfer(a: &TriMesh, b: &TriMesh, n: usize, seed: u64) -> Result<f64> {
 /// [`rfta_mesh::Error::EmptyMesh`] if either mesh has no triangles.
 pub fn hausdorff(a: &TriMesh, b: &TriMesh) -> Result<f64> {
     let (ia, ib) = (MeshIndex::new(a)?, MeshIndex::new(b)?);
+    Ok(hausdorff_indexed((a, &ia), (b, &ib)))
+}
+
+/// [`hausdorff`] with both meshes' indices already built.
+pub fn hausdorff_indexed(a: (&TriMesh, &MeshIndex), b: (&TriMesh, &MeshIndex)) -> f64 {
     let max_to = |from: &TriMesh, to: &MeshIndex| -> f64 {
         from.vertices
             .par_iter()
             .map(|v| to.unsigned_distance(*v))
             .reduce(|| 0.0, f64::max)
     };
-    Ok(max_to(a, &ib).max(max_to(b, &ia)))
+    max_to(a.0, b.1).max(max_to(b.0, a.1))
 }
 
 /// `1000 * mean((|s_i| - dist(p_i, mesh))^2)` over samples `(p_i, s_i)`.
@@ -70,10 +86,18 @@ pub fn hausdorff(a: &TriMesh, b: &TriMesh) -> Result<f64> {
 /// # Errors
 /// [`rfta_mesh::Error::EmptyMesh`] if the mesh has no triangles.
 pub fn sdf_energy(positions: &[DVec3], values: &[f64], mesh: &TriMesh) -> Result<f64> {
-    let index = MeshIndex::new(mesh)?;
+    Ok(sdf_energy_indexed(
+        positions,
+        values,
+        &MeshIndex::new(mesh)?,
+    ))
+}
+
+/// [`sdf_energy`] with the mesh's index already built.
+pub fn sdf_energy_indexed(positions: &[DVec3], values: &[f64], index: &MeshIndex) -> f64 {
     let n = positions.len().min(values.len());
     if n == 0 {
-        return Ok(0.0);
+        return 0.0;
     }
     let sum: f64 = (0..n)
         .into_par_iter()
@@ -82,7 +106,7 @@ pub fn sdf_energy(positions: &[DVec3], values: &[f64], mesh: &TriMesh) -> Result
             e * e
         })
         .sum();
-    Ok(1000.0 * sum / n as f64)
+    1000.0 * sum / n as f64
 }
 
 /// Counts and topology of a mesh, as the evaluation reports them.

@@ -175,6 +175,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         let mut shape_renders = vec![(format!("{} GT", shape.name), shape.gt.clone())];
         for &n in &a.res {
             let (grid, values) = grid_for(shape, &gt_index, n)?;
+            let positions: Vec<DVec3> = (0..grid.len()).map(|i| grid.position(i)).collect();
             for method in &a.methods {
                 bar.set_message(format!("{} n={n} {method}", shape.name));
                 let t = Instant::now();
@@ -183,11 +184,11 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                 let row = match result {
                     Ok(mesh) if !mesh.is_empty() => {
                         let s = rfta_metrics::MeshSummary::of(&mesh);
-                        let positions: Vec<DVec3> =
-                            (0..grid.len()).map(|i| grid.position(i)).collect();
-                        let chamfer = rfta_metrics::chamfer(&shape.gt, &mesh, a.samples, 1)?;
-                        let hausdorff = rfta_metrics::hausdorff(&shape.gt, &mesh)?;
-                        let e_sdf = rfta_metrics::sdf_energy(&positions, &values, &mesh)?;
+                        let index = MeshIndex::new(&mesh)?;
+                        let (gt, rec) = ((&shape.gt, &gt_index), (&mesh, &index));
+                        let chamfer = rfta_metrics::chamfer_indexed(gt, rec, a.samples, 1);
+                        let hausdorff = rfta_metrics::hausdorff_indexed(gt, rec);
+                        let e_sdf = rfta_metrics::sdf_energy_indexed(&positions, &values, &index);
                         if method == "mc" || n == *a.res.last().unwrap_or(&n) {
                             shape_renders.push((format!("{method} n={n}"), mesh.clone()));
                         }
