@@ -10,6 +10,7 @@
 )]
 
 mod info;
+mod psr;
 mod sample;
 mod ui;
 
@@ -53,6 +54,8 @@ enum Command {
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         iso: f64,
     },
+    /// Screened Poisson surface reconstruction of oriented points (PoissonRecon's algorithm).
+    Psr(psr::Args),
     /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
     Info {
         /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .ply .csv .xyz SDF samples).
@@ -76,6 +79,7 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),
+        Command::Psr(args) => psr::run(args, &ui),
         Command::Info { file, bounds } => info::run(&file, bounds, &ui),
         Command::Mc {
             input,

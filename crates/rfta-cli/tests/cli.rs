@@ -223,3 +223,55 @@ fn sample_is_byte_identical_at_any_thread_count() {
     assert_eq!(one, out("3"));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn psr_reconstructs_an_oriented_cloud_and_refuses_bad_ones() {
+    let dir = temp("psr");
+    // 3,000 points of the unit sphere (Fibonacci spiral) in the xyz + normals text format.
+    let n = 3000;
+    let mut text = String::new();
+    for i in 0..n {
+        let z = 1.0 - 2.0 * (f64::from(i) + 0.5) / f64::from(n);
+        let r = (1.0 - z * z).sqrt();
+        let phi = f64::from(i) * 2.399_963_229_728_653;
+        let (x, y) = (r * phi.cos(), r * phi.sin());
+        text += &format!("{x} {y} {z} {x} {y} {z}\n");
+    }
+    let cloud = dir.join("sphere.xyz");
+    std::fs::write(&cloud, text).expect("write cloud");
+    let out = dir.join("sphere.ply");
+    let o = rfta(&[
+        "psr",
+        s(&cloud),
+        "-o",
+        s(&out),
+        "--depth",
+        "6",
+        "--screen",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mesh = rfta_io::read_mesh(&out).expect("mesh");
+    let topo = rfta_mesh::Topology::of(&mesh);
+    assert!(
+        topo.is_watertight() && topo.is_manifold() && topo.components == 1,
+        "{topo:?}"
+    );
+    let v = mesh.signed_volume();
+    assert!((v - 4.18879).abs() < 0.05, "volume {v}");
+    // Two points: a clear error, non-zero status, no output file.
+    let two = dir.join("two.xyz");
+    std::fs::write(&two, "0 0 0 0 0 1\n1 0 0 0 0 1\n").expect("write");
+    let bad_out = dir.join("two.ply");
+    let o = rfta(&["psr", s(&two), "-o", s(&bad_out)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("at least 3"), "{}", stderr(&o));
+    assert!(!bad_out.exists());
+    // A zero normal is named with its index.
+    let zero = dir.join("zero.xyz");
+    std::fs::write(&zero, "0 0 0 0 0 1\n1 0 0 0 0 0\n0 1 0 0 0 1\n").expect("write");
+    let o = rfta(&["psr", s(&zero), "-o", s(&bad_out)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("normal"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -98,4 +98,53 @@ impl Analytic {
             }
         }
     }
+
+    /// `n` seeded, area-uniform points on the surface with outward unit normals (sphere: uniform
+    /// directions; torus: rejection on the tube angle; box: faces chosen by area).
+    pub fn oriented_samples(&self, n: usize, seed: u64) -> (Vec<DVec3>, Vec<DVec3>) {
+        let mut rng = rfta_geom::rng::Rng::new(seed);
+        let (mut p, mut nn) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let unit = |rng: &mut rfta_geom::rng::Rng| {
+            DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE
+        };
+        while p.len() < n {
+            match *self {
+                Analytic::Sphere { radius } => {
+                    let v = unit(&mut rng);
+                    let l = v.length();
+                    if l > 0.1 && l <= 1.0 {
+                        p.push(v / l * radius);
+                        nn.push(v / l);
+                    }
+                }
+                Analytic::Torus { major, minor } => {
+                    let th = rng.next_f64() * std::f64::consts::TAU;
+                    let ph = rng.next_f64() * std::f64::consts::TAU;
+                    if rng.next_f64() * (major + minor) >= major + minor * ph.cos() {
+                        continue;
+                    }
+                    let normal = DVec3::new(ph.cos() * th.cos(), ph.cos() * th.sin(), ph.sin());
+                    p.push(DVec3::new(major * th.cos(), major * th.sin(), 0.0) + minor * normal);
+                    nn.push(normal);
+                }
+                Analytic::Box { half } => {
+                    let areas = [half.y * half.z, half.x * half.z, half.x * half.y];
+                    let mut t = rng.next_f64() * areas.iter().sum::<f64>();
+                    let mut axis = 0;
+                    while axis < 2 && t >= areas[axis] {
+                        t -= areas[axis];
+                        axis += 1;
+                    }
+                    let side = if rng.next_f64() < 0.5 { -1.0 } else { 1.0 };
+                    let mut q = unit(&mut rng) * half;
+                    q[axis] = side * half[axis];
+                    let mut normal = DVec3::ZERO;
+                    normal[axis] = side;
+                    p.push(q);
+                    nn.push(normal);
+                }
+            }
+        }
+        (p, nn)
+    }
 }

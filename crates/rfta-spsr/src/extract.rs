@@ -1,0 +1,491 @@
+//! Crack-free iso-surface extraction on the adaptive octree (after Kazhdan, Klein, Dalal and
+//! Hoppe 2007, "Unconstrained isosurface extraction on arbitrary octrees").
+//!
+//! Iso-vertices live only on *minimal edges*: the pieces into which leaf corners cut an edge.
+//! A face between two leaves belongs to the finer one; a coarse leaf whose face borders finer
+//! leaves takes the segments of their faces. Every face is cut by a rule that depends only on
+//! the values along its boundary, so both cells on either side of it see the same segments, with
+//! opposite orientation. Each leaf chains its segments into closed loops, and each loop is
+//! triangulated without new vertices where that cannot create a non-manifold edge (minimal area,
+//! diagonals through the cell's interior only), else as a fan around its centroid. Hence the mesh
+//! is watertight and manifold wherever the surface stays inside the cube.
+
+use rayon::prelude::*;
+use rfta_geom::glam::DVec3;
+
+use crate::tree::{Frame, Level};
+
+/// A point in finest-depth integer coordinates.
+type P = [u32; 3];
+
+/// Packs the lower end of a minimal edge and its axis.
+fn vkey(q: P, axis: usize) -> u64 {
+    (u64::from(q[0]) << 38) | (u64::from(q[1]) << 20) | (u64::from(q[2]) << 2) | axis as u64
+}
+
+fn unpack(k: u64) -> (P, usize) {
+    let m = (1u64 << 18) - 1;
+    (
+        [
+            ((k >> 38) & m) as u32,
+            ((k >> 20) & m) as u32,
+            ((k >> 2) & m) as u32,
+        ],
+        (k & 3) as usize,
+    )
+}
+
+const CENTRE: u64 = 1 << 63;
+
+struct Ctx<'a> {
+    levels: &'a [Level],
+    values: &'a [Vec<f64>],
+    iso: f64,
+    depth: u32,
+}
+
+#[derive(Clone, Copy)]
+struct BPoint {
+    q: P,
+    v: f64,
+}
+
+impl Ctx<'_> {
+    fn finest(&self, d: u32, c: [i64; 3]) -> P {
+        let s = self.depth - d;
+        [(c[0] as u32) << s, (c[1] as u32) << s, (c[2] as u32) << s]
+    }
+
+    /// Final value at a node of depth `d` (level coordinates).
+    fn value(&self, d: u32, c: [i64; 3]) -> Option<f64> {
+        let node = self.levels[d as usize].node(c)?;
+        Some(self.values[d as usize][node as usize])
+    }
+
+    fn refined_cell(&self, d: u32, c: [i64; 3]) -> bool {
+        let level = &self.levels[d as usize];
+        level.cell(c).is_some_and(|i| level.refined[i as usize])
+    }
+
+    /// Leaf corners strictly inside the depth-`d` edge from `start` along `axis`, ascending.
+    fn edge_points(&self, d: u32, start: [i64; 3], axis: usize, out: &mut Vec<BPoint>) -> bool {
+        let (o1, o2) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut split = false;
+        for b in 0..4 {
+            let mut k = start;
+            k[o1] -= b & 1;
+            k[o2] -= b >> 1;
+            if self.refined_cell(d, k) {
+                split = true;
+                break;
+            }
+        }
+        if !split {
+            return true;
+        }
+        let s2 = start.map(|v| 2 * v);
+        let mut mid = s2;
+        mid[axis] += 1;
+        let Some(v) = self.value(d + 1, mid) else {
+            return false;
+        };
+        let ok = self.edge_points(d + 1, s2, axis, out);
+        out.push(BPoint {
+            q: self.finest(d + 1, mid),
+            v,
+        });
+        ok && self.edge_points(d + 1, mid, axis, out)
+    }
+}
+
+/// Segments and vertices gathered for one leaf.
+#[derive(Default)]
+struct LeafOut {
+    verts: Vec<(u64, DVec3)>,
+    segs: Vec<(u64, u64)>,
+    broken: bool,
+}
+
+impl Ctx<'_> {
+    fn vertex(&self, a: BPoint, b: BPoint, out: &mut LeafOut) -> u64 {
+        let (lo, hi) = if a.q <= b.q { (a, b) } else { (b, a) };
+        let axis = (0..3).find(|&i| lo.q[i] != hi.q[i]).unwrap_or(0);
+        let t = ((self.iso - lo.v) / (hi.v - lo.v)).clamp(0.0, 1.0);
+        let ql = DVec3::new(f64::from(lo.q[0]), f64::from(lo.q[1]), f64::from(lo.q[2]));
+        let qh = DVec3::new(f64::from(hi.q[0]), f64::from(hi.q[1]), f64::from(hi.q[2]));
+        let key = vkey(lo.q, axis);
+        out.verts.push((key, ql + (qh - ql) * t));
+        key
+    }
+
+    fn face(&self, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
+        let a = f / 2;
+        let side = (f % 2) as i64;
+        let n = 1i64 << d;
+        let mut nb = c;
+        nb[a] += 2 * side - 1;
+        if (0..n).contains(&nb[a]) && self.refined_cell(d, nb) {
+            let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+            for s in 0..4 {
+                let mut cc = c.map(|x| 2 * x);
+                cc[a] += side;
+                cc[u] += s & 1;
+                cc[v] += s >> 1;
+                self.face(d + 1, cc, f, out);
+            }
+        } else {
+            self.atomic_face(d, c, f, out);
+        }
+    }
+
+    fn atomic_face(&self, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
+        let a = f / 2;
+        let side = (f % 2) as i64;
+        let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+        let mut p0 = c;
+        p0[a] += side;
+        let corner = |du: i64, dv: i64| {
+            let mut q = p0;
+            q[u] += du;
+            q[v] += dv;
+            q
+        };
+        let order: [(i64, i64); 4] = if side == 1 {
+            [(0, 0), (1, 0), (1, 1), (0, 1)]
+        } else {
+            [(0, 0), (0, 1), (1, 1), (1, 0)]
+        };
+        let mut corner_vals = [0.0; 4];
+        let mut boundary: Vec<BPoint> = Vec::with_capacity(8);
+        let mut scratch = Vec::new();
+        for e in 0..4 {
+            let (au, av) = order[e];
+            let (bu, bv) = order[(e + 1) % 4];
+            let ca = corner(au, av);
+            let Some(va) = self.value(d, ca) else {
+                out.broken = true;
+                return;
+            };
+            corner_vals[e] = va;
+            boundary.push(BPoint {
+                q: self.finest(d, ca),
+                v: va,
+            });
+            let cb = corner(bu, bv);
+            let axis = if au != bu { u } else { v };
+            let start = if ca[axis] < cb[axis] { ca } else { cb };
+            scratch.clear();
+            if !self.edge_points(d, start, axis, &mut scratch) {
+                out.broken = true;
+                return;
+            }
+            if ca[axis] < cb[axis] {
+                boundary.extend(scratch.iter().copied());
+            } else {
+                boundary.extend(scratch.iter().rev().copied());
+            }
+        }
+        // Crossings in boundary order: (vertex, true for outside -> inside).
+        let inside = |v: f64| v > self.iso;
+        let mut xs: Vec<(u64, bool)> = Vec::new();
+        for k in 0..boundary.len() {
+            let (p, q) = (boundary[k], boundary[(k + 1) % boundary.len()]);
+            if inside(p.v) != inside(q.v) {
+                let key = self.vertex(p, q, out);
+                xs.push((key, !inside(p.v)));
+            }
+        }
+        if xs.is_empty() {
+            return;
+        }
+        let m = xs.len();
+        let join_inside = m > 2 && inside(corner_vals.iter().sum::<f64>() / 4.0);
+        for k in 0..m {
+            let next = xs[(k + 1) % m];
+            if !join_inside && xs[k].1 {
+                out.segs.push((xs[k].0, next.0));
+            } else if join_inside && !xs[k].1 {
+                out.segs.push((next.0, xs[k].0));
+            }
+        }
+    }
+}
+
+/// Faces of the cell `[lo, lo + size]` (finest coordinates) a vertex lies on, as a bit mask.
+fn face_mask(key: u64, lo: P, size: u32) -> u8 {
+    let (q, axis) = unpack(key);
+    let mut m = 0u8;
+    for a in 0..3 {
+        if a == axis {
+            continue;
+        }
+        if q[a] == lo[a] {
+            m |= 1 << (2 * a);
+        }
+        if q[a] == lo[a] + size {
+            m |= 1 << (2 * a + 1);
+        }
+    }
+    m
+}
+
+/// Minimal-area triangulation of a loop whose diagonals may not join two vertices on a common
+/// face of the cell; `None` when no such triangulation exists.
+fn triangulate(pos: &[DVec3], masks: &[u8]) -> Option<Vec<[usize; 3]>> {
+    let n = pos.len();
+    let allowed =
+        |i: usize, j: usize| j == i + 1 || (i == 0 && j == n - 1) || masks[i] & masks[j] == 0;
+    let mut cost = vec![f64::INFINITY; n * n];
+    let mut pick = vec![usize::MAX; n * n];
+    for i in 0..n - 1 {
+        cost[i * n + i + 1] = 0.0;
+    }
+    for len in 2..n {
+        for i in 0..n - len {
+            let j = i + len;
+            if !allowed(i, j) {
+                continue;
+            }
+            for k in i + 1..j {
+                let (a, b) = (cost[i * n + k], cost[k * n + j]);
+                if !a.is_finite() || !b.is_finite() {
+                    continue;
+                }
+                let area = (pos[k] - pos[i]).cross(pos[j] - pos[i]).length();
+                let c = a + b + area;
+                if c < cost[i * n + j] {
+                    cost[i * n + j] = c;
+                    pick[i * n + j] = k;
+                }
+            }
+        }
+    }
+    if !cost[n - 1].is_finite() {
+        return None;
+    }
+    let mut tris = Vec::with_capacity(n - 2);
+    let mut stack = vec![(0usize, n - 1)];
+    while let Some((i, j)) = stack.pop() {
+        if j <= i + 1 {
+            continue;
+        }
+        let k = pick[i * n + j];
+        tris.push([i, k, j]);
+        stack.push((i, k));
+        stack.push((k, j));
+    }
+    Some(tris)
+}
+
+/// Result of the extraction, in unit-cube coordinates.
+pub(crate) struct Extracted {
+    pub vertices: Vec<DVec3>,
+    pub faces: Vec<[u32; 3]>,
+    /// Leaves whose segments did not close into loops (0 unless something is wrong).
+    pub broken_leaves: usize,
+}
+
+/// Final value of every node: the nodal value at the finest depth where the node is active.
+pub(crate) fn final_values(levels: &[Level], u: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = vec![Vec::new(); levels.len()];
+    for d in (0..levels.len()).rev() {
+        let level = &levels[d];
+        let vals: Vec<f64> = if d + 1 < levels.len() {
+            let finer = &levels[d + 1];
+            let fv = &out[d + 1];
+            level
+                .nodes
+                .par_iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let k = [
+                        2 * i64::from(c[0]),
+                        2 * i64::from(c[1]),
+                        2 * i64::from(c[2]),
+                    ];
+                    finer.node(k).map_or(u[d][i], |j| fv[j as usize])
+                })
+                .collect()
+        } else {
+            u[d].clone()
+        };
+        out[d] = vals;
+    }
+    out
+}
+
+/// Extract the iso-surface `χ = iso` (triangles oriented toward decreasing χ, i.e. outward).
+pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extracted {
+    let depth = levels.len() as u32 - 1;
+    let ctx = Ctx {
+        levels,
+        values,
+        iso,
+        depth,
+    };
+    let inside = |v: f64| v > iso;
+    // Leaves with a sign change among their corners, and the coarser leaves that share an edge
+    // or a face with them (their boundary may be cut by the finer leaf's corners).
+    let mut cand: Vec<(u32, u32)> = levels
+        .par_iter()
+        .flat_map_iter(|level| {
+            let d = level.depth;
+            let vals = &values[d as usize];
+            let mut out = Vec::new();
+            for (ci, corners) in level.corners.iter().enumerate() {
+                if level.refined[ci] {
+                    continue;
+                }
+                let first = inside(vals[corners[0] as usize]);
+                if corners.iter().all(|&k| inside(vals[k as usize]) == first) {
+                    continue;
+                }
+                out.push((d, ci as u32));
+                let c = crate::keys::demorton(level.cells[ci]);
+                let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+                let n = 1i64 << d;
+                for o in 0..27 {
+                    let off = [
+                        (o % 3) as i64 - 1,
+                        ((o / 3) % 3) as i64 - 1,
+                        (o / 9) as i64 - 1,
+                    ];
+                    let nz = off.iter().filter(|&&v| v != 0).count();
+                    if nz == 0 || nz == 3 {
+                        continue;
+                    }
+                    let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
+                    if k.iter().any(|&v| v < 0 || v >= n) || level.cell(k).is_some() {
+                        continue;
+                    }
+                    let mut dd = d;
+                    while dd > 0 {
+                        dd -= 1;
+                        k = k.map(|v| v >> 1);
+                        if let Some(i) = levels[dd as usize].cell(k) {
+                            out.push((dd, i));
+                            break;
+                        }
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    cand.par_sort_unstable();
+    cand.dedup();
+
+    let results: Vec<(LeafOut, Vec<[u64; 3]>, Vec<DVec3>)> = cand
+        .par_iter()
+        .map(|&(d, ci)| {
+            let level = &levels[d as usize];
+            let c = crate::keys::demorton(level.cells[ci as usize]);
+            let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+            let mut out = LeafOut::default();
+            for f in 0..6 {
+                ctx.face(d, c, f, &mut out);
+            }
+            let mut tris = Vec::new();
+            let mut centres = Vec::new();
+            if out.segs.is_empty() {
+                return (out, tris, centres);
+            }
+            // Positions by key (first occurrence; duplicates are identical).
+            out.verts.sort_by_key(|v| v.0);
+            out.verts.dedup_by_key(|v| v.0);
+            let pos_of = |k: u64| {
+                let i = out.verts.partition_point(|v| v.0 < k);
+                out.verts[i].1
+            };
+            let lo = ctx.finest(d, c);
+            let size = 1u32 << (depth - d);
+            let mut used = vec![false; out.segs.len()];
+            let mut broken = false;
+            for s0 in 0..out.segs.len() {
+                if used[s0] {
+                    continue;
+                }
+                used[s0] = true;
+                let mut lp = vec![out.segs[s0].0];
+                let mut cur = out.segs[s0].1;
+                let mut closed = false;
+                for _ in 0..out.segs.len() {
+                    if cur == lp[0] {
+                        closed = true;
+                        break;
+                    }
+                    lp.push(cur);
+                    match (0..out.segs.len()).find(|&s| !used[s] && out.segs[s].0 == cur) {
+                        Some(s) => {
+                            used[s] = true;
+                            cur = out.segs[s].1;
+                        }
+                        None => break,
+                    }
+                }
+                if !closed || lp.len() < 3 {
+                    broken = true;
+                    continue;
+                }
+                let pos: Vec<DVec3> = lp.iter().map(|&k| pos_of(k)).collect();
+                let masks: Vec<u8> = lp.iter().map(|&k| face_mask(k, lo, size)).collect();
+                let tri = if lp.len() == 3 {
+                    Some(vec![[0, 1, 2]])
+                } else if lp.len() <= 12 {
+                    triangulate(&pos, &masks)
+                } else {
+                    None
+                };
+                match tri {
+                    Some(t) => tris.extend(t.iter().map(|t| [lp[t[0]], lp[t[1]], lp[t[2]]])),
+                    None => {
+                        let centre = pos.iter().copied().sum::<DVec3>() / pos.len() as f64;
+                        let ck = CENTRE | centres.len() as u64;
+                        centres.push(centre);
+                        for k in 0..lp.len() {
+                            tris.push([ck, lp[k], lp[(k + 1) % lp.len()]]);
+                        }
+                    }
+                }
+            }
+            out.broken |= broken;
+            (out, tris, centres)
+        })
+        .collect();
+
+    let mut keys: Vec<(u64, DVec3)> = results
+        .iter()
+        .flat_map(|r| r.0.verts.iter().copied())
+        .collect();
+    keys.par_sort_unstable_by_key(|v| v.0);
+    keys.dedup_by_key(|v| v.0);
+    let scale = 1.0 / f64::from(1u32 << depth);
+    let mut vertices: Vec<DVec3> = keys.iter().map(|v| v.1 * scale).collect();
+    let mut faces = Vec::new();
+    let mut broken_leaves = 0;
+    for (out, tris, centres) in &results {
+        broken_leaves += usize::from(out.broken);
+        let first_centre = vertices.len() as u32;
+        vertices.extend(centres.iter().map(|c| *c * scale));
+        for t in tris {
+            let f = t.map(|k| {
+                if k & CENTRE != 0 {
+                    first_centre + (k & !CENTRE) as u32
+                } else {
+                    keys.partition_point(|v| v.0 < k) as u32
+                }
+            });
+            faces.push(f);
+        }
+    }
+    Extracted {
+        vertices,
+        faces,
+        broken_leaves,
+    }
+}
+
+/// Map extracted unit-cube vertices to the world.
+pub(crate) fn to_world(frame: &Frame, vertices: &mut [DVec3]) {
+    vertices.iter_mut().for_each(|v| *v = frame.to_world(*v));
+}

@@ -1,0 +1,202 @@
+//! Morton keys for octree cells and grid nodes, and a fast hasher for integer keys.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// Spread the low 21 bits of `v` so that bit `k` lands on bit `3k`.
+fn spread(v: u32) -> u64 {
+    let mut x = u64::from(v) & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// Inverse of [`spread`].
+fn compact(v: u64) -> u32 {
+    let mut x = v & 0x1249_2492_4924_9249;
+    x = (x | (x >> 2)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x >> 4)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x >> 8)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x >> 16)) & 0x001f_0000_0000_ffff;
+    x = (x | (x >> 32)) & 0x1f_ffff;
+    x as u32
+}
+
+/// Morton (Z-order) key of integer coordinates below 2^21: x in bit 0, y in bit 1, z in bit 2.
+/// Sorting cells of one depth by key groups the eight children of a parent together, and a
+/// parent's key is its child's key shifted right by 3.
+pub(crate) fn morton(c: [u32; 3]) -> u64 {
+    spread(c[0]) | (spread(c[1]) << 1) | (spread(c[2]) << 2)
+}
+
+/// Coordinates of a Morton key.
+pub(crate) fn demorton(k: u64) -> [u32; 3] {
+    [compact(k), compact(k >> 1), compact(k >> 2)]
+}
+
+/// Multiplicative hasher for `u64` keys (keys are Morton codes, so the low bits are already well
+/// spread; one multiply and a fold mix the high bits in).
+#[derive(Default, Clone, Copy)]
+pub(crate) struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b) ^ self.0.rotate_left(8));
+        }
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        let h = i.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        self.0 = h ^ (h >> 29);
+    }
+}
+
+/// Map from a Morton key to a value (an index by default).
+pub(crate) type KeyMap<V = u32> = HashMap<u64, V, BuildHasherDefault<KeyHasher>>;
+
+/// An empty [`KeyMap`] with room for `n` keys.
+pub(crate) fn key_map<V>(n: usize) -> KeyMap<V> {
+    KeyMap::with_capacity_and_hasher(n, BuildHasherDefault::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_round_trips_and_orders_children_after_parents() {
+        for c in [[0, 0, 0], [1, 2, 3], [2_097_151, 5, 1_000_000], [7, 7, 7]] {
+            assert_eq!(demorton(morton(c)), c);
+        }
+        // The 8 children of cell (3, 5, 6) at the next depth have keys parent * 8 + 0..8.
+        let parent = morton([3, 5, 6]);
+        for c in 0..8u32 {
+            let child = [6 + (c & 1), 10 + ((c >> 1) & 1), 12 + ((c >> 2) & 1)];
+            assert_eq!(morton(child), parent * 8 + u64::from(c));
+        }
+    }
+}
+
+/// Sentinel for an absent entry.
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Index of a sparse set of integer points: 8x8x8 bricks, found by hashing the brick's key, each
+/// a dense array of 512 slots. A lookup costs one hash probe into a table ~100 times smaller
+/// than the set (so it stays in cache) and one array read.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct SparseIndex {
+    bricks: KeyMap<u32>,
+    slots: Vec<u32>,
+    extent: i64,
+}
+
+impl SparseIndex {
+    /// Index points `coords[i] -> i`; coordinates must be below `extent`.
+    pub(crate) fn new(coords: impl Iterator<Item = [u32; 3]>, extent: u32, hint: usize) -> Self {
+        let mut bricks: KeyMap<u32> = key_map(hint / 64 + 16);
+        let mut slots: Vec<u32> = Vec::new();
+        let mut last = (u64::MAX, 0u32);
+        for (i, c) in coords.enumerate() {
+            let key = morton([c[0] >> 3, c[1] >> 3, c[2] >> 3]);
+            let b = if key == last.0 {
+                last.1
+            } else {
+                let next = (slots.len() / 512) as u32;
+                let b = *bricks.entry(key).or_insert(next);
+                if b == next {
+                    slots.resize(slots.len() + 512, NONE);
+                }
+                last = (key, b);
+                b
+            };
+            slots[b as usize * 512 + slot(c)] = i as u32;
+        }
+        Self {
+            bricks,
+            slots,
+            extent: i64::from(extent),
+        }
+    }
+
+    /// Index of a point, if present.
+    #[inline]
+    pub(crate) fn get(&self, c: [i64; 3]) -> Option<u32> {
+        if c.iter().any(|&v| v < 0 || v >= self.extent) {
+            return None;
+        }
+        let c = [c[0] as u32, c[1] as u32, c[2] as u32];
+        let b = *self
+            .bricks
+            .get(&morton([c[0] >> 3, c[1] >> 3, c[2] >> 3]))?;
+        let s = self.slots[b as usize * 512 + slot(c)];
+        (s != NONE).then_some(s)
+    }
+}
+
+impl SparseIndex {
+    /// Indices of the 3x3x3 block around `c` (`NONE` where absent), in the order
+    /// `(x + 1) + 3 (y + 1) + 9 (z + 1)`: at most 8 brick probes instead of 27.
+    pub(crate) fn block27(&self, c: [i64; 3]) -> [u32; 27] {
+        let mut out = [NONE; 27];
+        // Per axis: validity, brick selector (0 or 1 relative to the first brick) and slot.
+        let mut valid = [[false; 3]; 3];
+        let mut sel = [[0usize; 3]; 3];
+        let mut local = [[0usize; 3]; 3];
+        let mut first = [0i64; 3];
+        for a in 0..3 {
+            first[a] = (c[a] - 1).div_euclid(8);
+            for k in 0..3 {
+                let q = c[a] + k as i64 - 1;
+                valid[a][k] = q >= 0 && q < self.extent;
+                sel[a][k] = (q.div_euclid(8) - first[a]) as usize;
+                local[a][k] = q.rem_euclid(8) as usize;
+            }
+        }
+        let mut ids = [[[NONE; 2]; 2]; 2];
+        for z in 0..2 {
+            for y in 0..2 {
+                for x in 0..2 {
+                    let b = [
+                        first[0] + x as i64,
+                        first[1] + y as i64,
+                        first[2] + z as i64,
+                    ];
+                    if b.iter().all(|&v| v >= 0) {
+                        let key = morton([b[0] as u32, b[1] as u32, b[2] as u32]);
+                        if let Some(&id) = self.bricks.get(&key) {
+                            ids[z][y][x] = id;
+                        }
+                    }
+                }
+            }
+        }
+        for kz in 0..3 {
+            for ky in 0..3 {
+                for kx in 0..3 {
+                    if !(valid[0][kx] && valid[1][ky] && valid[2][kz]) {
+                        continue;
+                    }
+                    let b = ids[sel[2][kz]][sel[1][ky]][sel[0][kx]];
+                    if b != NONE {
+                        let sl = (local[2][kz] << 6) | (local[1][ky] << 3) | local[0][kx];
+                        out[kx + 3 * ky + 9 * kz] = self.slots[b as usize * 512 + sl];
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+#[inline]
+fn slot(c: [u32; 3]) -> usize {
+    (((c[2] & 7) << 6) | ((c[1] & 7) << 3) | (c[0] & 7)) as usize
+}

@@ -1,0 +1,727 @@
+//! The finite-element system and its cascadic multigrid solution.
+//!
+//! The implicit function is a hierarchical sum `χ = Σ_d Σ_{i active at d} x_{d,i} B_{d,i}` of
+//! trilinear hats over all depths (Kazhdan and Hoppe 2013, §4). It minimises
+//! `∫ |∇χ - V|² + α Σ_s w_s (χ(p_s) - 1/2)²`, where `V` is the splatted inward normal field and
+//! the second term screens the samples toward the value 1/2. The solver goes once from the
+//! coarsest depth to the finest: at each depth the coarser solution is held fixed, its effect is
+//! moved to the right-hand side with exact parent-child integrals, and the depth's own system is
+//! relaxed (conjugate gradients on the complete coarse grids, multi-colour Gauss-Seidel above).
+
+use rayon::prelude::*;
+use rfta_geom::glam::DVec3;
+
+use crate::basis::{AxisTables, combine};
+use crate::tree::{Level, Sample, corner};
+use crate::{Boundary, SpsrParams};
+
+use crate::keys::NONE;
+/// Chunk length of parallel loops: fixed, so sums never depend on the thread count.
+const CHUNK: usize = 2048;
+
+/// Offset `o` (0..27) of a 3x3x3 stencil as `[-1, 0, 1]` per axis.
+#[inline]
+fn offset(o: usize) -> [i64; 3] {
+    [
+        (o % 3) as i64 - 1,
+        ((o / 3) % 3) as i64 - 1,
+        (o / 9) as i64 - 1,
+    ]
+}
+
+#[inline]
+fn ic(c: [u32; 3]) -> [i64; 3] {
+    [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])]
+}
+
+/// Aggregated screening sample of one cell (all samples inside it, weight-averaged).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ScreenCell {
+    /// Cell index in its level.
+    pub cell: u32,
+    /// Screening weight `α ā Σ w`.
+    pub weight: f64,
+    /// Weight-averaged position, unit cube.
+    pub pos: DVec3,
+    /// Hat values at the eight corners.
+    pub hats: [f64; 8],
+}
+
+/// Everything a depth needs to relax its own system.
+pub(crate) struct LevelSystem {
+    pub tables: AxisTables,
+    /// 27 neighbour node indices per node (`NONE` when absent).
+    pub nbr: Vec<u32>,
+    pub screen: Vec<ScreenCell>,
+    /// CSR: for node `i`, `inc[inc_off[i]..inc_off[i + 1]]` = `screen index << 3 | corner`.
+    pub inc_off: Vec<u32>,
+    pub inc: Vec<u32>,
+    pub diag: Vec<f64>,
+    /// Dirichlet: nodes on the cube's faces are pinned to 0.
+    pub fixed: Vec<bool>,
+    /// 27 node indices one depth coarser per node: hat `(c >> 1) + o - 1` per axis.
+    pub parents: Vec<u32>,
+    interior: [f64; 27],
+}
+
+impl LevelSystem {
+    /// Laplacian entry between node `c` and its neighbour at offset `o`.
+    #[inline]
+    fn k(&self, c: [u32; 3], o: usize, n: u32) -> f64 {
+        if c.iter().all(|&v| v >= 1 && v < n) {
+            return self.interior[o];
+        }
+        let t = &self.tables.same;
+        let off = offset(o);
+        let a = |axis: usize| &t[c[axis] as usize][(off[axis] + 1) as usize];
+        combine(a(0), a(1), a(2)).0
+    }
+}
+
+/// Hat weights of `u` inside the given cell of depth `d`.
+pub(crate) fn hats_in(u: DVec3, cell: [u32; 3], d: u32) -> [f64; 8] {
+    let n = f64::from(1u32 << d);
+    let t = [
+        (u.x * n - f64::from(cell[0])).clamp(0.0, 1.0),
+        (u.y * n - f64::from(cell[1])).clamp(0.0, 1.0),
+        (u.z * n - f64::from(cell[2])).clamp(0.0, 1.0),
+    ];
+    let mut w = [0.0; 8];
+    for (k, wk) in w.iter_mut().enumerate() {
+        let f = |axis: usize| {
+            if (k >> axis) & 1 == 1 {
+                t[axis]
+            } else {
+                1.0 - t[axis]
+            }
+        };
+        *wk = f(0) * f(1) * f(2);
+    }
+    w
+}
+
+fn cell_coords_of(u: DVec3, d: u32) -> [u32; 3] {
+    crate::tree::cell_of(u, d)
+}
+
+/// Build the per-depth systems: neighbour tables, screening cells and diagonals.
+pub(crate) fn build_systems(
+    levels: &[Level],
+    samples: &[Sample],
+    params: &SpsrParams,
+    alpha: f64,
+) -> Vec<LevelSystem> {
+    let depth = levels.len() as u32 - 1;
+    levels
+        .iter()
+        .enumerate()
+        .map(|(li, level)| {
+            let d = level.depth;
+            let n = level.n();
+            let tables = AxisTables::new(d);
+            let nbr: Vec<u32> = level
+                .nodes
+                .par_iter()
+                .flat_map_iter(|&c| level.node_index.block27(ic(c)))
+                .collect();
+            // Screening cells: samples grouped by their depth-d cell (Morton order is preserved).
+            let shift = 3 * (depth - d);
+            let mut screen = Vec::new();
+            let mut i = 0;
+            while i < samples.len() {
+                let key = samples[i].key >> shift;
+                let mut j = i;
+                let (mut w, mut p) = (0.0, DVec3::ZERO);
+                while j < samples.len() && samples[j].key >> shift == key {
+                    w += samples[j].weight;
+                    p += samples[j].weight * samples[j].pos;
+                    j += 1;
+                }
+                let cc = crate::keys::demorton(key);
+                if let Some(cell) = level.cell(ic(cc))
+                    && alpha > 0.0
+                {
+                    let pos = p / w;
+                    screen.push(ScreenCell {
+                        cell,
+                        weight: alpha * w,
+                        pos,
+                        hats: hats_in(pos, cc, d),
+                    });
+                }
+                i = j;
+            }
+            let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(screen.len() * 8);
+            for (s, sc) in screen.iter().enumerate() {
+                for (k, &node) in level.corners[sc.cell as usize].iter().enumerate() {
+                    pairs.push((node, ((s as u32) << 3) | k as u32));
+                }
+            }
+            pairs.par_sort_unstable();
+            let mut inc_off = vec![0u32; level.nodes.len() + 1];
+            for &(node, _) in &pairs {
+                inc_off[node as usize + 1] += 1;
+            }
+            for i in 0..level.nodes.len() {
+                inc_off[i + 1] += inc_off[i];
+            }
+            let inc: Vec<u32> = pairs.iter().map(|p| p.1).collect();
+            let mut interior = [0.0; 27];
+            if n >= 2 {
+                for (o, v) in interior.iter_mut().enumerate() {
+                    let off = offset(o);
+                    let a = |axis: usize| &tables.same[1][(off[axis] + 1) as usize];
+                    *v = combine(a(0), a(1), a(2)).0;
+                }
+            }
+            let fixed: Vec<bool> = level
+                .nodes
+                .par_iter()
+                .map(|c| {
+                    params.boundary == Boundary::Dirichlet && c.iter().any(|&v| v == 0 || v == n)
+                })
+                .collect();
+            let parents: Vec<u32> = if li == 0 {
+                Vec::new()
+            } else {
+                let coarse = &levels[li - 1];
+                level
+                    .nodes
+                    .par_iter()
+                    .flat_map_iter(|&c| {
+                        let p = [
+                            i64::from(c[0] >> 1),
+                            i64::from(c[1] >> 1),
+                            i64::from(c[2] >> 1),
+                        ];
+                        coarse.node_index.block27(p)
+                    })
+                    .collect()
+            };
+            let mut sys = LevelSystem {
+                parents,
+                tables,
+                nbr,
+                screen,
+                inc_off,
+                inc,
+                diag: Vec::new(),
+                fixed,
+                interior,
+            };
+            let diag: Vec<f64> = (0..level.nodes.len())
+                .into_par_iter()
+                .map(|i| {
+                    let mut v = sys.k(level.nodes[i], 13, n);
+                    for &e in &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize] {
+                        let sc = &sys.screen[(e >> 3) as usize];
+                        let h = sc.hats[(e & 7) as usize];
+                        v += sc.weight * h * h;
+                    }
+                    v
+                })
+                .collect();
+            sys.diag = diag;
+            sys
+        })
+        .collect()
+}
+
+/// Splat the (inward) normal field: each sample's area-weighted normal goes to the hats of the two
+/// depths bracketing its fractional depth, linearly weighted. Returns per depth the coefficients
+/// of `V` in that depth's hat basis (divided by the cell volume so that `V` integrates to the
+/// sample's area times its normal).
+pub(crate) fn splat_normals(levels: &[Level], samples: &[Sample]) -> Vec<Vec<DVec3>> {
+    let depth = levels.len() as u32 - 1;
+    let mut v: Vec<Vec<DVec3>> = levels
+        .iter()
+        .map(|l| vec![DVec3::ZERO; l.nodes.len()])
+        .collect();
+    for s in samples {
+        let d0 = s.depth.floor() as u32;
+        let t = s.depth - f64::from(d0);
+        let normal = -s.normal * (s.area / s.weight);
+        for (d, w) in [(d0, 1.0 - t), (d0 + 1, t)] {
+            if w <= 0.0 || d > depth {
+                continue;
+            }
+            let level = &levels[d as usize];
+            let nf = f64::from(1u32 << d);
+            let inv_vol = nf.powi(3);
+            // Quadratic B-spline weights of the three nearest nodes per axis: the normal field is
+            // the hat interpolation of a degree-2 kernel around the sample (as smooth as
+            // PoissonRecon's degree-2 normal splat; the weights sum to 1 so V keeps its integral).
+            let mut idx = [[0i64; 3]; 3];
+            let mut wts = [[0.0f64; 3]; 3];
+            for axis in 0..3 {
+                let x = s.pos[axis] * nf;
+                let r = x.round() as i64;
+                for (k, j) in (r - 1..=r + 1).enumerate() {
+                    idx[axis][k] = j;
+                    wts[axis][k] = quadratic_bspline(j as f64 - x);
+                }
+            }
+            for (kz, &jz) in idx[2].iter().enumerate() {
+                for (ky, &jy) in idx[1].iter().enumerate() {
+                    for (kx, &jx) in idx[0].iter().enumerate() {
+                        let h = wts[0][kx] * wts[1][ky] * wts[2][kz];
+                        if h == 0.0 {
+                            continue;
+                        }
+                        if let Some(node) = level.node([jx, jy, jz]) {
+                            v[d as usize][node as usize] += normal * (w * h * inv_vol);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    v
+}
+
+/// The centred quadratic B-spline (support `[-1.5, 1.5]`, integral 1).
+#[inline]
+pub(crate) fn quadratic_bspline(t: f64) -> f64 {
+    let a = t.abs();
+    if a <= 0.5 {
+        0.75 - a * a
+    } else if a < 1.5 {
+        0.5 * (1.5 - a) * (1.5 - a)
+    } else {
+        0.0
+    }
+}
+
+/// `∫ ∇B_i · V_d` for every node of a depth, `V_d` given by same-depth coefficients.
+fn apply_g(level: &Level, sys: &LevelSystem, v: &[DVec3]) -> Vec<f64> {
+    let t = &sys.tables.same;
+    (0..level.nodes.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|i| {
+            let c = level.nodes[i];
+            let mut acc = 0.0;
+            for o in 0..27 {
+                let j = sys.nbr[i * 27 + o];
+                if j == NONE {
+                    continue;
+                }
+                let vj = v[j as usize];
+                if vj == DVec3::ZERO {
+                    continue;
+                }
+                let off = offset(o);
+                let a = |axis: usize| &t[c[axis] as usize][(off[axis] + 1) as usize];
+                let (_, g) = combine(a(0), a(1), a(2));
+                acc += g[0] * vj.x + g[1] * vj.y + g[2] * vj.z;
+            }
+            acc
+        })
+        .collect()
+}
+
+/// Calls `f(parent node, [mass, stiffness, mixed] per axis)` for every active node one depth
+/// coarser whose hat overlaps the hat of fine node `i` (coordinates `c`).
+#[inline]
+fn for_parents(
+    sys: &LevelSystem,
+    i: usize,
+    c: [u32; 3],
+    mut f: impl FnMut(u32, &[f64; 3], &[f64; 3], &[f64; 3]),
+) {
+    let p = &sys.tables.parent;
+    let par = &sys.parents[i * 27..i * 27 + 27];
+    for oz in 0..3usize {
+        let az = &p[c[2] as usize][oz];
+        if az[0] == 0.0 && az[2] == 0.0 {
+            continue;
+        }
+        for oy in 0..3usize {
+            let ay = &p[c[1] as usize][oy];
+            if ay[0] == 0.0 && ay[2] == 0.0 {
+                continue;
+            }
+            for ox in 0..3usize {
+                let ax = &p[c[0] as usize][ox];
+                if ax[0] == 0.0 && ax[2] == 0.0 {
+                    continue;
+                }
+                let j = par[ox + 3 * oy + 9 * oz];
+                if j != NONE {
+                    f(j, ax, ay, az);
+                }
+            }
+        }
+    }
+}
+
+/// The two-scale parents of fine node `c` (up to 8): `(slot in the 27 parents, weight)`.
+#[inline]
+fn prolongation_parents(c: [u32; 3]) -> ([(usize, f64); 8], usize) {
+    let axis = |v: u32| -> ([(usize, f64); 2], usize) {
+        if v & 1 == 0 {
+            ([(1, 1.0), (0, 0.0)], 1)
+        } else {
+            ([(1, 0.5), (2, 0.5)], 2)
+        }
+    };
+    let (ax, nx) = axis(c[0]);
+    let (ay, ny) = axis(c[1]);
+    let (az, nz) = axis(c[2]);
+    let mut out = [(0usize, 0.0f64); 8];
+    let mut m = 0;
+    for &(oz, wz) in &az[..nz] {
+        for &(oy, wy) in &ay[..ny] {
+            for &(ox, wx) in &ax[..nx] {
+                out[m] = (ox + 3 * oy + 9 * oz, wx * wy * wz);
+                m += 1;
+            }
+        }
+    }
+    (out, m)
+}
+
+/// Values of a coarser depth's nodal function at this depth's nodes (exact: the hat spaces nest).
+fn prolong<T>(fine: &Level, sys: &LevelSystem, u: &[T]) -> Vec<T>
+where
+    T: Copy + Send + Sync + Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
+{
+    (0..fine.nodes.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|i| {
+            let (ps, m) = prolongation_parents(fine.nodes[i]);
+            let mut acc = T::default();
+            for &(slot, w) in &ps[..m] {
+                let j = sys.parents[i * 27 + slot];
+                if j != NONE {
+                    acc = acc + u[j as usize] * w;
+                }
+            }
+            acc
+        })
+        .collect()
+}
+
+/// Restriction `Σ_children w β_child` of a finer depth's right-hand side onto the coarser nodes
+/// (the transpose of [`prolong`], accumulated in node order).
+fn restrict(coarse: &Level, fine: &Level, fine_sys: &LevelSystem, beta: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; coarse.nodes.len()];
+    for (i, &b) in beta.iter().enumerate() {
+        if b == 0.0 {
+            continue;
+        }
+        let (ps, m) = prolongation_parents(fine.nodes[i]);
+        for &(slot, w) in &ps[..m] {
+            let j = fine_sys.parents[i * 27 + slot];
+            if j != NONE {
+                out[j as usize] += w * b;
+            }
+        }
+    }
+    out
+}
+
+/// `(K + S) x` on one depth.
+fn apply_a(level: &Level, sys: &LevelSystem, x: &[f64]) -> Vec<f64> {
+    let n = level.n();
+    let fs: Vec<f64> = sys
+        .screen
+        .par_iter()
+        .map(|s| {
+            let corners = &level.corners[s.cell as usize];
+            let mut f = 0.0;
+            for k in 0..8 {
+                f += s.hats[k] * x[corners[k] as usize];
+            }
+            f
+        })
+        .collect();
+    (0..level.nodes.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|i| {
+            if sys.fixed[i] {
+                return x[i];
+            }
+            let c = level.nodes[i];
+            let mut acc = 0.0;
+            for o in 0..27 {
+                let j = sys.nbr[i * 27 + o];
+                if j != NONE && !sys.fixed[j as usize] {
+                    acc += sys.k(c, o, n) * x[j as usize];
+                }
+            }
+            for &e in &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize] {
+                let s = &sys.screen[(e >> 3) as usize];
+                acc += s.weight * s.hats[(e & 7) as usize] * fs[(e >> 3) as usize];
+            }
+            acc
+        })
+        .collect()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum()
+}
+
+/// Conjugate gradients on one depth (used on the complete coarse grids).
+fn conjugate_gradients(
+    level: &Level,
+    sys: &LevelSystem,
+    r0: &[f64],
+    iters: usize,
+    tol: f64,
+) -> Vec<f64> {
+    let n = r0.len();
+    let mut x = vec![0.0; n];
+    let mut r: Vec<f64> = r0
+        .iter()
+        .zip(&sys.fixed)
+        .map(|(&v, &f)| if f { 0.0 } else { v })
+        .collect();
+    let mut p = r.clone();
+    let mut rr = dot(&r, &r);
+    let stop = rr * tol * tol;
+    for _ in 0..iters {
+        if rr <= stop || rr == 0.0 {
+            break;
+        }
+        let ap = apply_a(level, sys, &p);
+        let pap = dot(&p, &ap);
+        if pap.is_nan() || pap <= 0.0 {
+            break;
+        }
+        let a = rr / pap;
+        x.par_iter_mut().zip(&p).for_each(|(x, p)| *x += a * p);
+        r.par_iter_mut().zip(&ap).for_each(|(r, q)| *r -= a * q);
+        let rr_new = dot(&r, &r);
+        let beta = rr_new / rr;
+        rr = rr_new;
+        p.par_iter_mut()
+            .zip(&r)
+            .for_each(|(p, r)| *p = r + beta * *p);
+    }
+    x
+}
+
+/// Laplacian row of node `c` (27 entries, offsets as in [`offset`]).
+#[inline]
+fn k_row(sys: &LevelSystem, c: [u32; 3], n: u32) -> [f64; 27] {
+    if c.iter().all(|&v| v >= 1 && v < n) {
+        return sys.interior;
+    }
+    let mut row = [0.0; 27];
+    for (o, r) in row.iter_mut().enumerate() {
+        *r = sys.k(c, o, n);
+    }
+    row
+}
+
+/// Multi-colour Gauss-Seidel: nodes of one colour share no matrix entry, so each colour is
+/// relaxed in parallel and the result does not depend on the thread count. The value of the
+/// current iterate at every screening cell is kept up to date after each colour, so a node's
+/// screening term costs one read per incident cell.
+fn gauss_seidel(level: &Level, sys: &LevelSystem, r: &[f64], x: &mut [f64], sweeps: usize) {
+    let n = level.n();
+    let mut fs: Vec<f64> = sys
+        .screen
+        .par_iter()
+        .map(|s| {
+            let corners = &level.corners[s.cell as usize];
+            (0..8).map(|k| s.hats[k] * x[corners[k] as usize]).sum()
+        })
+        .collect();
+    let mut old: Vec<f64> = Vec::new();
+    for _ in 0..sweeps {
+        for c in 0..8 {
+            let (lo, hi) = (level.colors[c], level.colors[c + 1]);
+            let xs: &[f64] = x;
+            let fsr: &[f64] = &fs;
+            let updated: Vec<f64> = (lo..hi)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(|i| {
+                    if sys.fixed[i] {
+                        return 0.0;
+                    }
+                    let row = k_row(sys, level.nodes[i], n);
+                    let nb = &sys.nbr[i * 27..i * 27 + 27];
+                    let mut acc = 0.0;
+                    for o in 0..27 {
+                        let j = nb[o];
+                        if o != 13 && j != NONE {
+                            acc += row[o] * xs[j as usize];
+                        }
+                    }
+                    let xi = xs[i];
+                    for &e in &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize] {
+                        let s = &sys.screen[(e >> 3) as usize];
+                        let h = s.hats[(e & 7) as usize];
+                        acc += s.weight * h * (fsr[(e >> 3) as usize] - h * xi);
+                    }
+                    (r[i] - acc) / sys.diag[i]
+                })
+                .collect();
+            old.clear();
+            old.extend_from_slice(&x[lo..hi]);
+            x[lo..hi].copy_from_slice(&updated);
+            // Cells see exactly one corner of each colour.
+            let xs: &[f64] = x;
+            let old = &old;
+            fs.par_iter_mut()
+                .with_min_len(CHUNK)
+                .zip(&sys.screen)
+                .for_each(|(f, s)| {
+                    let corners = &level.corners[s.cell as usize];
+                    for k in 0..8 {
+                        let j = corners[k] as usize;
+                        if j >= lo && j < hi {
+                            *f += s.hats[k] * (xs[j] - old[j - lo]);
+                        }
+                    }
+                });
+        }
+    }
+}
+
+/// Solution: per depth the coefficients `x_d` and the nodal values `U_d` of `Σ_{l ≤ d} χ_l`.
+pub(crate) struct Solution {
+    pub x: Vec<Vec<f64>>,
+    pub u: Vec<Vec<f64>>,
+}
+
+/// The cascadic solve, coarse to fine.
+pub(crate) fn solve(
+    levels: &[Level],
+    systems: &[LevelSystem],
+    v: &[Vec<DVec3>],
+    params: &SpsrParams,
+    base: u32,
+) -> Solution {
+    let depth = levels.len() - 1;
+    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l.
+    let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
+    for d in (0..=depth).rev() {
+        let mut b = apply_g(&levels[d], &systems[d], &v[d]);
+        if d < depth {
+            let r = restrict(&levels[d], &levels[d + 1], &systems[d + 1], &beta[d + 1]);
+            b.iter_mut().zip(&r).for_each(|(b, r)| *b += r);
+        }
+        beta[d] = b;
+    }
+    let target = 0.5;
+    let mut xs: Vec<Vec<f64>> = Vec::with_capacity(depth + 1);
+    let mut us: Vec<Vec<f64>> = Vec::with_capacity(depth + 1);
+    let mut w_prev: Vec<DVec3> = Vec::new();
+    for d in 0..=depth {
+        let level = &levels[d];
+        let sys = &systems[d];
+        let mut rhs = std::mem::take(&mut beta[d]);
+        // Coarser normal field and coarser solution, through exact parent-child integrals.
+        if d > 0 {
+            let u_prev = &us[d - 1];
+            let corr: Vec<f64> = (0..level.nodes.len())
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(|i| {
+                    let c = level.nodes[i];
+                    let mut acc = 0.0;
+                    for_parents(sys, i, c, |j, ax, ay, az| {
+                        let (k, g) = combine(ax, ay, az);
+                        let w = w_prev[j as usize];
+                        acc += g[0] * w.x + g[1] * w.y + g[2] * w.z - k * u_prev[j as usize];
+                    });
+                    acc
+                })
+                .collect();
+            rhs.iter_mut().zip(&corr).for_each(|(r, c)| *r += c);
+        }
+        // Screening toward the target, minus what the coarser solution already gives.
+        for (si, s) in sys.screen.iter().enumerate() {
+            let _ = si;
+            let fc = if d > 0 {
+                let coarse = &levels[d - 1];
+                let cc = cell_coords_of(s.pos, d as u32 - 1);
+                match coarse.cell(ic(cc)) {
+                    Some(ci) => {
+                        let h = hats_in(s.pos, cc, d as u32 - 1);
+                        let corners = &coarse.corners[ci as usize];
+                        (0..8).map(|k| h[k] * us[d - 1][corners[k] as usize]).sum()
+                    }
+                    None => 0.0,
+                }
+            } else {
+                0.0
+            };
+            let corners = &level.corners[s.cell as usize];
+            for k in 0..8 {
+                rhs[corners[k] as usize] += s.weight * s.hats[k] * (target - fc);
+            }
+        }
+        for (r, &f) in rhs.iter_mut().zip(&sys.fixed) {
+            if f {
+                *r = 0.0;
+            }
+        }
+        let x = if d as u32 <= base {
+            conjugate_gradients(level, sys, &rhs, params.base_iterations, 1e-6)
+        } else {
+            let mut x = vec![0.0; level.nodes.len()];
+            gauss_seidel(level, sys, &rhs, &mut x, params.iterations);
+            x
+        };
+        let mut u = if d > 0 {
+            prolong(level, sys, &us[d - 1])
+        } else {
+            vec![0.0; x.len()]
+        };
+        u.iter_mut().zip(&x).for_each(|(u, x)| *u += x);
+        let mut w = if d > 0 {
+            prolong(level, sys, &w_prev)
+        } else {
+            vec![DVec3::ZERO; x.len()]
+        };
+        w.iter_mut().zip(&v[d]).for_each(|(w, v)| *w += *v);
+        w_prev = w;
+        xs.push(x);
+        us.push(u);
+    }
+    Solution { x: xs, u: us }
+}
+
+/// Evaluate the implicit function at a unit-cube point: the sum over depths of the hats around it.
+pub(crate) fn evaluate(levels: &[Level], sol: &Solution, p: DVec3, base: u32) -> f64 {
+    let mut f = 0.0;
+    let base = base.min(levels.len() as u32 - 1);
+    // Depths up to `base` are complete grids: their sum is interpolated from U_base.
+    let start = base as usize;
+    for (d, level) in levels.iter().enumerate().skip(start) {
+        let c = cell_coords_of(p, d as u32);
+        let h = hats_in(p, c, d as u32);
+        let vals = if d == start { &sol.u[d] } else { &sol.x[d] };
+        match level.cell(ic(c)) {
+            Some(ci) => {
+                let corners = &level.corners[ci as usize];
+                for k in 0..8 {
+                    f += h[k] * vals[corners[k] as usize];
+                }
+            }
+            None => {
+                for (k, hk) in h.iter().enumerate() {
+                    let o = corner(k);
+                    let q = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
+                    if let Some(j) = level.node(ic(q)) {
+                        f += hk * vals[j as usize];
+                    }
+                }
+            }
+        }
+    }
+    f
+}

@@ -1,0 +1,274 @@
+//! Screened Poisson on analytic clouds: topology, accuracy against the exact surface,
+//! determinism across thread counts, and errors on bad input.
+#![allow(clippy::print_stderr)]
+
+use rfta_geom::{OrientedPoints, glam::DVec3};
+use rfta_mesh::Topology;
+use rfta_spsr::{Boundary, Error, SpsrParams, reconstruct};
+use rfta_testkit::Analytic;
+
+const R: f64 = 0.6;
+const RT: f64 = 0.25;
+
+type Cloud = (Vec<DVec3>, Vec<DVec3>, Analytic);
+
+fn sphere(n: usize, seed: u64) -> Cloud {
+    let s = Analytic::Sphere { radius: 1.0 };
+    let (p, nn) = s.oriented_samples(n, seed);
+    (p, nn, s)
+}
+
+/// Torus R = 0.6, r = 0.25 around z.
+fn torus(n: usize, seed: u64) -> Cloud {
+    let s = Analytic::Torus {
+        major: R,
+        minor: RT,
+    };
+    let (p, nn) = s.oriented_samples(n, seed);
+    (p, nn, s)
+}
+
+/// Box [-0.5, 0.5] x [-0.4, 0.4] x [-0.3, 0.3] (sharp edges).
+fn cuboid(n: usize, seed: u64) -> Cloud {
+    let s = Analytic::Box {
+        half: DVec3::new(0.5, 0.4, 0.3),
+    };
+    let (p, nn) = s.oriented_samples(n, seed);
+    (p, nn, s)
+}
+
+struct Outcome {
+    mean: f64,
+    max: f64,
+    topology: Topology,
+    volume: f64,
+}
+
+fn run(cloud: Cloud, params: &SpsrParams) -> Outcome {
+    let (p, n, shape) = cloud;
+    let dist = |q: DVec3| shape.sdf(q).abs();
+    let points = OrientedPoints::new(p, n, None).expect("valid cloud");
+    let out = reconstruct(&points, params).expect("reconstruction");
+    assert_eq!(out.report.broken_leaves, 0);
+    let d: Vec<f64> = out.mesh.vertices.iter().map(|&v| dist(v)).collect();
+    eprintln!(
+        "{} points: mean {:.3e} max {:.3e}",
+        points.len(),
+        d.iter().sum::<f64>() / d.len() as f64,
+        d.iter().copied().fold(0.0, f64::max)
+    );
+    Outcome {
+        mean: d.iter().sum::<f64>() / d.len() as f64,
+        max: d.iter().copied().fold(0.0, f64::max),
+        topology: Topology::of(&out.mesh),
+        volume: out.mesh.signed_volume(),
+    }
+}
+
+fn check_closed(o: &Outcome, genus: i64, what: &str) {
+    let t = &o.topology;
+    assert!(
+        t.is_watertight(),
+        "{what}: {} boundary edges",
+        t.boundary_edges
+    );
+    assert!(t.is_manifold(), "{what}: not manifold: {t:?}");
+    assert!(
+        t.is_consistently_oriented(),
+        "{what}: {} misoriented edges",
+        t.misoriented_edges
+    );
+    assert_eq!(t.components, 1, "{what}");
+    assert_eq!(t.genus(), Some(genus), "{what}");
+    assert!(o.volume > 0.0, "{what}: triangles face inward");
+}
+
+fn depth8() -> SpsrParams {
+    SpsrParams {
+        depth: 8,
+        screening: 10.0,
+        ..SpsrParams::default()
+    }
+}
+
+// Bars: the issue asks for a mean vertex error below 0.5% of the shape's size (sphere: 2,
+// torus: 1.7). Our own, tighter bars come from PoissonRecon 18.75 at the same setting on the
+// same kind of cloud (degree 1, depth 8, alpha 10: sphere 100k mean 9.3e-5 / max 2.1e-3, torus
+// 100k 1.06e-4 / 7.6e-4 on a torus of twice this size): mean within 2x and max within 3x.
+
+#[test]
+fn sphere_10k_and_100k_depth_8() {
+    let o = run(sphere(10_000, 1), &depth8());
+    check_closed(&o, 0, "sphere 10k");
+    assert!(
+        o.mean < 7e-4, // well inside 0.5% of the size (1e-2)
+        "sphere 10k mean {}",
+        o.mean
+    );
+    assert!(o.max < 6e-3, "sphere 10k max {}", o.max);
+    let o = run(sphere(100_000, 2), &depth8());
+    check_closed(&o, 0, "sphere 100k");
+    assert!(o.mean < 2.0 * 9.3e-5, "sphere 100k mean {}", o.mean);
+    assert!(o.max < 3.0 * 2.1e-3, "sphere 100k max {}", o.max);
+    let exact = 4.0 / 3.0 * std::f64::consts::PI;
+    assert!(
+        (o.volume - exact).abs() < 1e-3 * exact,
+        "volume {}",
+        o.volume
+    );
+}
+
+#[test]
+fn torus_10k_and_100k_depth_8() {
+    let o = run(torus(10_000, 3), &depth8());
+    check_closed(&o, 1, "torus 10k");
+    assert!(
+        o.mean < 7e-4, // well inside 0.5% of the size (8.5e-3)
+        "torus 10k mean {}",
+        o.mean
+    );
+    let o = run(torus(100_000, 4), &depth8());
+    check_closed(&o, 1, "torus 100k");
+    assert!(o.mean < 2.0 * 1.06e-4, "torus 100k mean {}", o.mean);
+    assert!(o.max < 3.0 * 7.6e-4, "torus 100k max {}", o.max);
+}
+
+#[test]
+fn box_with_sharp_edges_10k_and_100k_depth_8() {
+    // Screened Poisson rounds sharp corners off by a few cells of the depth the samples support
+    // (about depth 7 for 10k points here, cell 1.1 / 128 = 8.6e-3; depth 8 for 100k, 4.3e-3), so
+    // the max sits at the corners, at most 1.5 such cells (ratio measured 1.2), and the mean is a
+    // quarter of a cell at most (measured 0.18 at 10k).
+    for (n, seed, cell) in [(10_000, 5, 1.1 / 128.0), (100_000, 6, 1.1 / 256.0)] {
+        let o = run(cuboid(n, seed), &depth8());
+        check_closed(&o, 0, "box");
+        assert!(
+            o.mean < 0.005 * 1.0 && o.mean < 0.25 * cell,
+            "box {n} mean {}",
+            o.mean
+        );
+        assert!(o.max < 1.5 * cell, "box {n} max {}", o.max);
+        let exact = 1.0 * 0.8 * 0.6;
+        assert!(
+            (o.volume - exact).abs() < 0.01 * exact,
+            "box volume {}",
+            o.volume
+        );
+    }
+}
+
+#[test]
+fn same_mesh_at_one_and_two_threads() {
+    let (p, n, _) = torus(20_000, 9);
+    let points = OrientedPoints::new(p, n, None).expect("cloud");
+    let one = reconstruct(
+        &points,
+        &SpsrParams {
+            threads: Some(1),
+            ..depth8()
+        },
+    )
+    .expect("1 thread");
+    let two = reconstruct(
+        &points,
+        &SpsrParams {
+            threads: Some(2),
+            ..depth8()
+        },
+    )
+    .expect("2 threads");
+    assert_eq!(one.mesh.faces, two.mesh.faces);
+    assert_eq!(one.mesh.vertices, two.mesh.vertices);
+    let again = reconstruct(
+        &points,
+        &SpsrParams {
+            threads: Some(2),
+            ..depth8()
+        },
+    )
+    .expect("again");
+    assert_eq!(again.mesh.vertices, two.mesh.vertices);
+}
+
+#[test]
+fn rfta_setting_and_dirichlet_give_closed_meshes() {
+    let o = run(sphere(10_000, 11), &SpsrParams::rfta_reference());
+    check_closed(&o, 0, "rfta setting");
+    // PoissonRecon in this setting: mean 3.2e-4, max 7.5e-3 (sphere 10k).
+    assert!(o.mean < 2.0 * 3.2e-4, "mean {}", o.mean);
+    let o = run(
+        torus(10_000, 12),
+        &SpsrParams {
+            boundary: Boundary::Dirichlet,
+            ..depth8()
+        },
+    );
+    check_closed(&o, 1, "dirichlet");
+    assert!(o.mean < 1e-3, "dirichlet mean {}", o.mean);
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+    let n = vec![DVec3::Z; 3];
+    // NaN positions and zero normals are refused when the cloud is built.
+    let mut bad = p.clone();
+    bad[1].y = f64::NAN;
+    assert!(OrientedPoints::new(bad, n.clone(), None).is_err());
+    assert!(OrientedPoints::new(p.clone(), vec![DVec3::Z, DVec3::ZERO, DVec3::Z], None).is_err());
+    // Too few points.
+    let two = OrientedPoints::new(p[..2].to_vec(), n[..2].to_vec(), None).expect("cloud");
+    let e = reconstruct(&two, &SpsrParams::default()).expect_err("two points");
+    assert!(matches!(e, Error::TooFewPoints { found: 2 }), "{e}");
+    assert!(e.to_string().contains("at least 3"), "{e}");
+    // All points identical.
+    let same = OrientedPoints::new(vec![DVec3::ONE; 50], vec![DVec3::X; 50], None).expect("cloud");
+    let e = reconstruct(&same, &SpsrParams::default()).expect_err("identical");
+    assert!(e.to_string().contains("identical"), "{e}");
+    // Parameters out of range.
+    let (p, n, _) = sphere(100, 1);
+    let ok = OrientedPoints::new(p, n, None).expect("cloud");
+    for params in [
+        SpsrParams {
+            depth: 0,
+            ..SpsrParams::default()
+        },
+        SpsrParams {
+            depth: 17,
+            ..SpsrParams::default()
+        },
+        SpsrParams {
+            screening: f64::NAN,
+            ..SpsrParams::default()
+        },
+        SpsrParams {
+            box_scale: 0.5,
+            ..SpsrParams::default()
+        },
+        SpsrParams {
+            samples_per_node: 0.0,
+            ..SpsrParams::default()
+        },
+        SpsrParams {
+            threads: Some(0),
+            ..SpsrParams::default()
+        },
+    ] {
+        let e = reconstruct(&ok, &params).expect_err("bad params");
+        assert!(matches!(e, Error::InvalidParams(_)), "{e}");
+    }
+    // Three collinear points: a degenerate but valid call must not panic.
+    let line = OrientedPoints::new(
+        vec![DVec3::ZERO, DVec3::X, DVec3::X * 2.0],
+        vec![DVec3::Y; 3],
+        None,
+    )
+    .expect("cloud");
+    let _ = reconstruct(
+        &line,
+        &SpsrParams {
+            depth: 5,
+            ..SpsrParams::default()
+        },
+    );
+}
