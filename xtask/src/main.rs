@@ -4,6 +4,7 @@
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `tidy`: repository rules (see [`tidy`]).
 //! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
+//! - `bench spsr`: our screened Poisson against PoissonRecon, same clouds, same run (see [`bench`]).
 
 #![expect(
     clippy::print_stdout,
@@ -11,6 +12,7 @@
     reason = "a command-line tool reports on its terminal"
 )]
 
+mod bench;
 mod eval;
 mod shaders;
 mod tidy;
@@ -30,6 +32,8 @@ commands:
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-paper]
             [--samples N] [--quick] [--out DIR]: Table 2 with marching cubes measured in the same run,
             written to target/eval/<run>/ (results.csv, report.md, chamfer.svg, contact_sheet.png)
+  bench     spsr [--quick] [--points N] [--depths 8,10] [--out DIR]: our sPSR and PoissonRecon
+            side by side (PoissonRecon needs `cargo bench-spsr`, i.e. --features poissonrecon)
 ";
 
 fn main() -> Result<()> {
@@ -40,6 +44,8 @@ fn main() -> Result<()> {
         Some("shaders") => shaders::run(&root),
         Some("tidy") => tidy::run(&root),
         Some("eval") => eval::run(&root, &args[1..]),
+        Some("bench") => bench::run(&root, &args[1..]),
+        Some("bench-child") => bench::child_main(&args[1..]),
         Some("help" | "--help" | "-h") | None => {
             print!("{HELP}");
             Ok(())

@@ -289,7 +289,7 @@ fn run(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
     let system_time = t1.elapsed();
 
     let t2 = Instant::now();
-    let sol = solve::solve(&levels, &systems, &v, params, base);
+    let sol = solve::solve(&levels, &systems, v, params, base);
     drop(systems);
     let (mut num, mut den) = (0.0, 0.0);
     let vals: Vec<f64> = {
@@ -308,6 +308,7 @@ fn run(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
 
     let t3 = Instant::now();
     let values = extract::final_values(&levels, &sol.u);
+    drop(sol);
     let mut ex = extract::extract(&levels, &values, iso);
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });

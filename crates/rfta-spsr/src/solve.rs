@@ -50,8 +50,6 @@ pub(crate) struct ScreenCell {
 /// Everything a depth needs to relax its own system.
 pub(crate) struct LevelSystem {
     pub tables: AxisTables,
-    /// 27 neighbour node indices per node (`NONE` when absent).
-    pub nbr: Vec<u32>,
     pub screen: Vec<ScreenCell>,
     /// CSR: for node `i`, `inc[inc_off[i]..inc_off[i + 1]]` = `screen index << 3 | corner`.
     pub inc_off: Vec<u32>,
@@ -59,8 +57,6 @@ pub(crate) struct LevelSystem {
     pub diag: Vec<f64>,
     /// Dirichlet: nodes on the cube's faces are pinned to 0.
     pub fixed: Vec<bool>,
-    /// 27 node indices one depth coarser per node: hat `(c >> 1) + o - 1` per axis.
-    pub parents: Vec<u32>,
     interior: [f64; 27],
 }
 
@@ -114,17 +110,17 @@ pub(crate) fn build_systems(
     let depth = levels.len() as u32 - 1;
     levels
         .iter()
-        .enumerate()
-        .map(|(li, level)| {
+        .map(|level| {
             let d = level.depth;
             let n = level.n();
             let tables = AxisTables::new(d);
-            let nbr: Vec<u32> = level
-                .nodes
-                .par_iter()
-                .flat_map_iter(|&c| level.node_index.block27(ic(c)))
-                .collect();
+
             // Screening cells: samples grouped by their depth-d cell (Morton order is preserved).
+            // As in PoissonRecon (Kazhdan and Hoppe 2013, §4.3; `adaptiveExponent` 1), the
+            // screening weight grows as 2^d with depth: the Laplacian's entries shrink with the
+            // cell width while a cell's samples keep their weight, and this keeps the pull toward
+            // the samples equally strong against the smoothness term at every depth.
+            let depth_scale = f64::from(1u32 << d);
             let shift = 3 * (depth - d);
             let mut screen = Vec::new();
             let mut i = 0;
@@ -144,7 +140,7 @@ pub(crate) fn build_systems(
                     let pos = p / w;
                     screen.push(ScreenCell {
                         cell,
-                        weight: alpha * w,
+                        weight: alpha * depth_scale * w,
                         pos,
                         hats: hats_in(pos, cc, d),
                     });
@@ -181,27 +177,8 @@ pub(crate) fn build_systems(
                     params.boundary == Boundary::Dirichlet && c.iter().any(|&v| v == 0 || v == n)
                 })
                 .collect();
-            let parents: Vec<u32> = if li == 0 {
-                Vec::new()
-            } else {
-                let coarse = &levels[li - 1];
-                level
-                    .nodes
-                    .par_iter()
-                    .flat_map_iter(|&c| {
-                        let p = [
-                            i64::from(c[0] >> 1),
-                            i64::from(c[1] >> 1),
-                            i64::from(c[2] >> 1),
-                        ];
-                        coarse.node_index.block27(p)
-                    })
-                    .collect()
-            };
             let mut sys = LevelSystem {
-                parents,
                 tables,
-                nbr,
                 screen,
                 inc_off,
                 inc,
@@ -225,6 +202,34 @@ pub(crate) fn build_systems(
             sys
         })
         .collect()
+}
+
+/// 27 neighbour node indices per node (`NONE` when absent), in [`offset`] order. Built for one
+/// depth at a time and dropped after use: it is the largest per-node array.
+pub(crate) fn neighbor_table(level: &Level) -> Vec<u32> {
+    let mut out = vec![NONE; level.nodes.len() * 27];
+    out.par_chunks_mut(27)
+        .with_min_len(CHUNK)
+        .zip(&level.nodes)
+        .for_each(|(o, &c)| o.copy_from_slice(&level.node_index.block27(ic(c))));
+    out
+}
+
+/// 27 node indices one depth coarser per node: hat `(c >> 1) + o - 1` per axis.
+pub(crate) fn parent_table(fine: &Level, coarse: &Level) -> Vec<u32> {
+    let mut out = vec![NONE; fine.nodes.len() * 27];
+    out.par_chunks_mut(27)
+        .with_min_len(CHUNK)
+        .zip(&fine.nodes)
+        .for_each(|(o, &c)| {
+            let p = [
+                i64::from(c[0] >> 1),
+                i64::from(c[1] >> 1),
+                i64::from(c[2] >> 1),
+            ];
+            o.copy_from_slice(&coarse.node_index.block27(p));
+        });
+    out
 }
 
 /// Splat the (inward) normal field: each sample's area-weighted normal goes to the hats of the two
@@ -293,7 +298,7 @@ pub(crate) fn quadratic_bspline(t: f64) -> f64 {
 }
 
 /// `∫ ∇B_i · V_d` for every node of a depth, `V_d` given by same-depth coefficients.
-fn apply_g(level: &Level, sys: &LevelSystem, v: &[DVec3]) -> Vec<f64> {
+fn apply_g(level: &Level, sys: &LevelSystem, nbr: &[u32], v: &[DVec3]) -> Vec<f64> {
     let t = &sys.tables.same;
     (0..level.nodes.len())
         .into_par_iter()
@@ -302,7 +307,7 @@ fn apply_g(level: &Level, sys: &LevelSystem, v: &[DVec3]) -> Vec<f64> {
             let c = level.nodes[i];
             let mut acc = 0.0;
             for o in 0..27 {
-                let j = sys.nbr[i * 27 + o];
+                let j = nbr[i * 27 + o];
                 if j == NONE {
                     continue;
                 }
@@ -325,12 +330,13 @@ fn apply_g(level: &Level, sys: &LevelSystem, v: &[DVec3]) -> Vec<f64> {
 #[inline]
 fn for_parents(
     sys: &LevelSystem,
+    parents: &[u32],
     i: usize,
     c: [u32; 3],
     mut f: impl FnMut(u32, &[f64; 3], &[f64; 3], &[f64; 3]),
 ) {
     let p = &sys.tables.parent;
-    let par = &sys.parents[i * 27..i * 27 + 27];
+    let par = &parents[i * 27..i * 27 + 27];
     for oz in 0..3usize {
         let az = &p[c[2] as usize][oz];
         if az[0] == 0.0 && az[2] == 0.0 {
@@ -382,7 +388,7 @@ fn prolongation_parents(c: [u32; 3]) -> ([(usize, f64); 8], usize) {
 }
 
 /// Values of a coarser depth's nodal function at this depth's nodes (exact: the hat spaces nest).
-fn prolong<T>(fine: &Level, sys: &LevelSystem, u: &[T]) -> Vec<T>
+fn prolong<T>(fine: &Level, parents: &[u32], u: &[T]) -> Vec<T>
 where
     T: Copy + Send + Sync + Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
 {
@@ -393,7 +399,7 @@ where
             let (ps, m) = prolongation_parents(fine.nodes[i]);
             let mut acc = T::default();
             for &(slot, w) in &ps[..m] {
-                let j = sys.parents[i * 27 + slot];
+                let j = parents[i * 27 + slot];
                 if j != NONE {
                     acc = acc + u[j as usize] * w;
                 }
@@ -405,7 +411,7 @@ where
 
 /// Restriction `Σ_children w β_child` of a finer depth's right-hand side onto the coarser nodes
 /// (the transpose of [`prolong`], accumulated in node order).
-fn restrict(coarse: &Level, fine: &Level, fine_sys: &LevelSystem, beta: &[f64]) -> Vec<f64> {
+fn restrict(coarse: &Level, fine: &Level, fine_parents: &[u32], beta: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; coarse.nodes.len()];
     for (i, &b) in beta.iter().enumerate() {
         if b == 0.0 {
@@ -413,7 +419,7 @@ fn restrict(coarse: &Level, fine: &Level, fine_sys: &LevelSystem, beta: &[f64]) 
         }
         let (ps, m) = prolongation_parents(fine.nodes[i]);
         for &(slot, w) in &ps[..m] {
-            let j = fine_sys.parents[i * 27 + slot];
+            let j = fine_parents[i * 27 + slot];
             if j != NONE {
                 out[j as usize] += w * b;
             }
@@ -423,7 +429,7 @@ fn restrict(coarse: &Level, fine: &Level, fine_sys: &LevelSystem, beta: &[f64]) 
 }
 
 /// `(K + S) x` on one depth.
-fn apply_a(level: &Level, sys: &LevelSystem, x: &[f64]) -> Vec<f64> {
+fn apply_a(level: &Level, sys: &LevelSystem, nbr: &[u32], x: &[f64]) -> Vec<f64> {
     let n = level.n();
     let fs: Vec<f64> = sys
         .screen
@@ -447,7 +453,7 @@ fn apply_a(level: &Level, sys: &LevelSystem, x: &[f64]) -> Vec<f64> {
             let c = level.nodes[i];
             let mut acc = 0.0;
             for o in 0..27 {
-                let j = sys.nbr[i * 27 + o];
+                let j = nbr[i * 27 + o];
                 if j != NONE && !sys.fixed[j as usize] {
                     acc += sys.k(c, o, n) * x[j as usize];
                 }
@@ -474,6 +480,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 fn conjugate_gradients(
     level: &Level,
     sys: &LevelSystem,
+    nbr: &[u32],
     r0: &[f64],
     iters: usize,
     tol: f64,
@@ -492,7 +499,7 @@ fn conjugate_gradients(
         if rr <= stop || rr == 0.0 {
             break;
         }
-        let ap = apply_a(level, sys, &p);
+        let ap = apply_a(level, sys, nbr, &p);
         let pap = dot(&p, &ap);
         if pap.is_nan() || pap <= 0.0 {
             break;
@@ -527,7 +534,14 @@ fn k_row(sys: &LevelSystem, c: [u32; 3], n: u32) -> [f64; 27] {
 /// relaxed in parallel and the result does not depend on the thread count. The value of the
 /// current iterate at every screening cell is kept up to date after each colour, so a node's
 /// screening term costs one read per incident cell.
-fn gauss_seidel(level: &Level, sys: &LevelSystem, r: &[f64], x: &mut [f64], sweeps: usize) {
+fn gauss_seidel(
+    level: &Level,
+    sys: &LevelSystem,
+    nbr: &[u32],
+    r: &[f64],
+    x: &mut [f64],
+    sweeps: usize,
+) {
     let n = level.n();
     let mut fs: Vec<f64> = sys
         .screen
@@ -551,7 +565,7 @@ fn gauss_seidel(level: &Level, sys: &LevelSystem, r: &[f64], x: &mut [f64], swee
                         return 0.0;
                     }
                     let row = k_row(sys, level.nodes[i], n);
-                    let nb = &sys.nbr[i * 27..i * 27 + 27];
+                    let nb = &nbr[i * 27..i * 27 + 27];
                     let mut acc = 0.0;
                     for o in 0..27 {
                         let j = nb[o];
@@ -600,17 +614,20 @@ pub(crate) struct Solution {
 pub(crate) fn solve(
     levels: &[Level],
     systems: &[LevelSystem],
-    v: &[Vec<DVec3>],
+    mut v: Vec<Vec<DVec3>>,
     params: &SpsrParams,
     base: u32,
 ) -> Solution {
     let depth = levels.len() - 1;
-    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l.
+    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l. The big index tables exist one depth at a time.
     let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
     for d in (0..=depth).rev() {
-        let mut b = apply_g(&levels[d], &systems[d], &v[d]);
+        let nbr = neighbor_table(&levels[d]);
+        let mut b = apply_g(&levels[d], &systems[d], &nbr, &v[d]);
+        drop(nbr);
         if d < depth {
-            let r = restrict(&levels[d], &levels[d + 1], &systems[d + 1], &beta[d + 1]);
+            let parents = parent_table(&levels[d + 1], &levels[d]);
+            let r = restrict(&levels[d], &levels[d + 1], &parents, &beta[d + 1]);
             b.iter_mut().zip(&r).for_each(|(b, r)| *b += r);
         }
         beta[d] = b;
@@ -623,8 +640,10 @@ pub(crate) fn solve(
         let level = &levels[d];
         let sys = &systems[d];
         let mut rhs = std::mem::take(&mut beta[d]);
-        // Coarser normal field and coarser solution, through exact parent-child integrals.
-        if d > 0 {
+        // Coarser normal field and coarser solution, through exact parent-child integrals, and
+        // both prolonged to this depth (they do not depend on this depth's solution).
+        let (u_coarse, w_coarse) = if d > 0 {
+            let parents = parent_table(level, &levels[d - 1]);
             let u_prev = &us[d - 1];
             let corr: Vec<f64> = (0..level.nodes.len())
                 .into_par_iter()
@@ -632,7 +651,7 @@ pub(crate) fn solve(
                 .map(|i| {
                     let c = level.nodes[i];
                     let mut acc = 0.0;
-                    for_parents(sys, i, c, |j, ax, ay, az| {
+                    for_parents(sys, &parents, i, c, |j, ax, ay, az| {
                         let (k, g) = combine(ax, ay, az);
                         let w = w_prev[j as usize];
                         acc += g[0] * w.x + g[1] * w.y + g[2] * w.z - k * u_prev[j as usize];
@@ -641,10 +660,18 @@ pub(crate) fn solve(
                 })
                 .collect();
             rhs.iter_mut().zip(&corr).for_each(|(r, c)| *r += c);
-        }
+            (
+                prolong(level, &parents, u_prev),
+                prolong(level, &parents, &w_prev),
+            )
+        } else {
+            (
+                vec![0.0; level.nodes.len()],
+                vec![DVec3::ZERO; level.nodes.len()],
+            )
+        };
         // Screening toward the target, minus what the coarser solution already gives.
-        for (si, s) in sys.screen.iter().enumerate() {
-            let _ = si;
+        for s in &sys.screen {
             let fc = if d > 0 {
                 let coarse = &levels[d - 1];
                 let cc = cell_coords_of(s.pos, d as u32 - 1);
@@ -669,25 +696,20 @@ pub(crate) fn solve(
                 *r = 0.0;
             }
         }
+        let nbr = neighbor_table(level);
         let x = if d as u32 <= base {
-            conjugate_gradients(level, sys, &rhs, params.base_iterations, 1e-6)
+            conjugate_gradients(level, sys, &nbr, &rhs, params.base_iterations, 1e-6)
         } else {
             let mut x = vec![0.0; level.nodes.len()];
-            gauss_seidel(level, sys, &rhs, &mut x, params.iterations);
+            gauss_seidel(level, sys, &nbr, &rhs, &mut x, params.iterations);
             x
         };
-        let mut u = if d > 0 {
-            prolong(level, sys, &us[d - 1])
-        } else {
-            vec![0.0; x.len()]
-        };
+        drop(nbr);
+        let mut u = u_coarse;
         u.iter_mut().zip(&x).for_each(|(u, x)| *u += x);
-        let mut w = if d > 0 {
-            prolong(level, sys, &w_prev)
-        } else {
-            vec![DVec3::ZERO; x.len()]
-        };
+        let mut w = w_coarse;
         w.iter_mut().zip(&v[d]).for_each(|(w, v)| *w += *v);
+        v[d] = Vec::new();
         w_prev = w;
         xs.push(x);
         us.push(u);

@@ -139,38 +139,56 @@ pub(crate) fn corner(k: usize) -> [u32; 3] {
 }
 
 /// Density estimate (Kazhdan and Hoppe 2013, §4.1 of Kazhdan, Bolitho and Hoppe 2006): sample
-/// weights are splatted onto the hats of `kernel_depth`, and the field read back at each sample
-/// is its number of samples per node there. Because samples lie on a surface the count per node
-/// falls by 4 per depth, which gives the depth where it equals `samples_per_node` and the area
-/// each sample stands for.
+/// weights are splatted onto the hats of the kernel depth (`depth - 2`) and of every coarser
+/// depth down to `base`; the field read back at a sample is its number of samples per node there.
+/// Starting at the kernel depth and moving coarser while that count is below
+/// `samples_per_node` (a sparse sample would otherwise mostly see itself), the count at the first
+/// depth where it suffices, falling by 4 per finer depth because samples lie on a surface, gives
+/// the sample's fractional depth and the surface area it stands for.
 pub(crate) fn estimate_density(samples: &mut [Sample], params: &SpsrParams, base: u32) {
     let depth = params.depth;
     let kd = depth.saturating_sub(2).max(1).min(depth);
-    let mut field: KeyMap<f64> = key_map(samples.len() * 2);
-    for s in samples.iter() {
-        let (c, w) = hat_weights(s.pos, kd);
-        for (k, wk) in w.iter().enumerate() {
-            let o = corner(k);
-            let key = morton([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
-            *field.entry(key).or_insert(0.0) += s.weight * wk;
-        }
-    }
-    let h2 = (1.0 / f64::from(1u32 << kd)).powi(2);
+    let lowest = base.min(kd).max(1);
+    let levels: Vec<u32> = (lowest..=kd).rev().collect();
+    let fields: Vec<KeyMap<f64>> = levels
+        .par_iter()
+        .map(|&d| {
+            let mut field: KeyMap<f64> = key_map(samples.len() * 2);
+            for s in samples.iter() {
+                let (c, w) = hat_weights(s.pos, d);
+                for (k, wk) in w.iter().enumerate() {
+                    let o = corner(k);
+                    let key = morton([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
+                    *field.entry(key).or_insert(0.0) += s.weight * wk;
+                }
+            }
+            field
+        })
+        .collect();
     let spn = params.samples_per_node;
     samples.par_iter_mut().for_each(|s| {
-        let (c, w) = hat_weights(s.pos, kd);
-        let mut rho = 0.0;
-        for (k, wk) in w.iter().enumerate() {
-            let o = corner(k);
-            let key = morton([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
-            rho += wk * field.get(&key).copied().unwrap_or(0.0);
+        let mut chosen = (kd, 1e-12);
+        for (&d, field) in levels.iter().zip(&fields) {
+            let (c, w) = hat_weights(s.pos, d);
+            let mut rho = 0.0;
+            for (k, wk) in w.iter().enumerate() {
+                let o = corner(k);
+                let key = morton([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
+                rho += wk * field.get(&key).copied().unwrap_or(0.0);
+            }
+            // A surface through a node's cells meets its hat with mean weight 2/3 of a plane
+            // through the node (the mean of t^2 + (1 - t)^2 over the offset t), so the raw field
+            // under-counts samples per node by that factor.
+            let rho = (1.5 * rho).max(1e-12);
+            chosen = (d, rho);
+            if rho >= spn {
+                break;
+            }
         }
-        // A surface through a node's cells meets its hat with mean weight 2/3 of a plane through
-        // the node (the mean of t^2 + (1 - t)^2 over the offset t), so the raw field
-        // under-counts samples per node by that factor.
-        let rho = (1.5 * rho).max(1e-12);
-        let d = f64::from(kd) + 0.5 * (rho / spn).log2();
-        s.depth = d.clamp(f64::from(base), f64::from(depth));
+        let (d, rho) = chosen;
+        let h2 = (1.0 / f64::from(1u32 << d)).powi(2);
+        let fd = f64::from(d) + 0.5 * (rho / spn).log2();
+        s.depth = fd.clamp(f64::from(base), f64::from(depth));
         s.area = s.weight * h2 / rho;
     });
 }
@@ -293,18 +311,36 @@ pub(crate) fn build_levels(samples: &[Sample], depth: u32, base: u32) -> Vec<Lev
 
 fn make_level(depth: u32, cells: Vec<u64>, refined: Vec<bool>) -> Level {
     let cell_index = SparseIndex::new(cells.iter().map(|&k| demorton(k)), 1 << depth, cells.len());
-    // Corner nodes, sorted by (colour, Morton).
-    let mut keys: Vec<u64> = cells
-        .par_iter()
-        .flat_map_iter(|&k| {
+    // Corner nodes, sorted by (colour, Morton). Cells come in broods of eight (Morton-sorted, so
+    // each brood is contiguous), whose 27 distinct corners are listed once.
+    let key_of = |nc: [u32; 3]| (color(nc) << 60) | morton(nc);
+    let mut keys: Vec<u64> = if cells.len().is_multiple_of(8)
+        && cells
+            .chunks(8)
+            .all(|b| b[0].is_multiple_of(8) && b[7] == b[0] + 7)
+    {
+        let mut keys = vec![0u64; cells.len() / 8 * 27];
+        keys.par_chunks_mut(27)
+            .zip(cells.par_chunks(8))
+            .for_each(|(out, brood)| {
+                let c = demorton(brood[0]);
+                for (q, k) in out.iter_mut().enumerate() {
+                    let o = [(q % 3) as u32, ((q / 3) % 3) as u32, (q / 9) as u32];
+                    *k = key_of([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
+                }
+            });
+        keys
+    } else {
+        let mut keys = vec![0u64; cells.len() * 8];
+        keys.par_chunks_mut(8).zip(&cells).for_each(|(out, &k)| {
             let c = demorton(k);
-            (0..8).map(move |q| {
+            for (q, key) in out.iter_mut().enumerate() {
                 let o = corner(q);
-                let nc = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
-                (color(nc) << 60) | morton(nc)
-            })
-        })
-        .collect();
+                *key = key_of([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
+            }
+        });
+        keys
+    };
     sort_dedup(&mut keys);
     let mask = (1u64 << 60) - 1;
     let nodes: Vec<[u32; 3]> = keys.par_iter().map(|&k| demorton(k & mask)).collect();
