@@ -4,7 +4,7 @@
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `tidy`: repository rules (see [`tidy`]).
 //! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
-//! - `bench spsr`: our screened Poisson against PoissonRecon, same clouds, same run (see [`bench`]).
+//! - `bench spsr`: our screened Poisson against PoissonRecon, same clouds, same run (see [`mod@bench`]).
 
 #![expect(
     clippy::print_stdout,
