@@ -8,3 +8,6 @@ mod spheres;
 
 /// Marching cubes against the reference (libigl) results.
 mod mc_reference;
+
+/// The reconstruction on an analytic torus.
+mod reconstruct;

@@ -11,6 +11,7 @@
 
 mod info;
 mod psr;
+mod reconstruct;
 mod sample;
 mod ui;
 
@@ -54,6 +55,10 @@ enum Command {
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         iso: f64,
     },
+    /// Reach for the Arcs: a mesh from signed distance samples.
+    Reconstruct(reconstruct::Args),
+    /// Reconstruct a built-in genus-2 shape from a 21^3 grid and compare with marching cubes.
+    Demo(reconstruct::DemoArgs),
     /// Screened Poisson surface reconstruction of oriented points (PoissonRecon's algorithm).
     Psr(psr::Args),
     /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
@@ -80,6 +85,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),
         Command::Psr(args) => psr::run(args, &ui),
+        Command::Reconstruct(args) => reconstruct::run(args, &ui),
+        Command::Demo(args) => reconstruct::demo(args, &ui),
         Command::Info { file, bounds } => info::run(&file, bounds, &ui),
         Command::Mc {
             input,

@@ -275,3 +275,18 @@ fn psr_reconstructs_an_oriented_cloud_and_refuses_bad_ones() {
     assert!(stderr(&o).contains("normal"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn demo_reconstructs_the_genus_two_shape_better_than_marching_cubes() {
+    let dir = temp("demo");
+    let out = dir.join("demo.ply");
+    let o = rfta(&["demo", "-o", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("marching cubes") && err.contains("watertight"), "{err}");
+    let mesh = rfta_io::read_mesh(&out).expect("mesh");
+    let topo = rfta_mesh::Topology::of(&mesh);
+    assert!(topo.is_watertight() && topo.is_manifold(), "{topo:?}");
+    assert!(mesh.signed_volume() > 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -423,8 +423,15 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
                         None => break,
                     }
                 }
-                if !closed || lp.len() < 3 {
+                if !closed {
                     broken = true;
+                    continue;
+                }
+                if lp.len() < 3 {
+                    // Two segments joining the same two vertices on two faces of this cell: the
+                    // surface only grazes the cell (an edge whose middle has the other sign). The
+                    // patch here has no area; the two cells across those faces each hold the edge
+                    // once, with opposite orientations, so nothing is emitted.
                     continue;
                 }
                 let pos: Vec<DVec3> = lp.iter().map(|&k| pos_of(k)).collect();

@@ -697,7 +697,7 @@ pub(crate) fn solve(
             }
         }
         let nbr = neighbor_table(level);
-        let x = if d as u32 <= base {
+        let x = if (d as u32) < base {
             conjugate_gradients(level, sys, &nbr, &rhs, params.base_iterations, 1e-6)
         } else {
             let mut x = vec![0.0; level.nodes.len()];

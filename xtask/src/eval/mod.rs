@@ -274,9 +274,17 @@ fn failed_row(
 fn run_method(method: &str, grid: &Grid, values: &[f64]) -> Result<TriMesh, String> {
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
-        // The reconstruction lands with the pipeline crate; until then its rows say so.
         "rfta" | "rfta-paper" => {
-            Err("unavailable: the reconstruction pipeline is not implemented yet".into())
+            let params = if method == "rfta" {
+                rfta::Params::default()
+            } else {
+                rfta::Params::paper_table()
+            };
+            let samples = rfta_geom::SdfSamples::grid(*grid, values.to_vec())
+                .map_err(|e| e.to_string())?;
+            rfta::reconstruct(&samples, &params)
+                .map(|r| r.mesh)
+                .map_err(|e| e.to_string())
         }
         other => Err(format!("unknown method {other}")),
     }

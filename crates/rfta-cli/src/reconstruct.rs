@@ -1,0 +1,215 @@
+//! `rfta reconstruct` (a mesh from an SDF file) and `rfta demo` (a built-in shape with holes).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use rfta::geom::{Grid, SdfSamples, TriMesh, glam::DVec3};
+use rfta::{Params, Stage};
+
+use crate::ui::{Ui, parse_bounds};
+
+/// Parameter presets.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub(crate) enum Preset {
+    /// The paper's defaults: 10 fine-tuning rounds, 3 points per sphere.
+    Default,
+    /// The setting of the paper's Table 2: 20 rounds, 30 points per sphere.
+    Paper,
+    /// gpytoolbox's default: 3 rounds.
+    Fast,
+}
+
+/// GPU use for the rasterization.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub(crate) enum Gpu {
+    /// The GPU when one is found (this build falls back to the CPU, with a log line, otherwise).
+    Auto,
+    /// Ask for the GPU (same fallback).
+    On,
+    /// CPU only.
+    Off,
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct Args {
+    /// SDF samples: a grid (.npy, .exr) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
+    input: PathBuf,
+    /// Output mesh (.obj .ply .stl .glb).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
+    #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = parse_bounds)]
+    bounds: Option<rfta_io::GridBounds>,
+    /// The SDF was clamped at this magnitude (samples at or beyond it get no tangency point).
+    #[arg(long)]
+    clamp: Option<f64>,
+    #[command(flatten)]
+    tuning: Tuning,
+}
+
+/// Options shared by `reconstruct` and `demo`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct Tuning {
+    /// Starting parameters; the options below override them.
+    #[arg(long, value_enum, default_value_t = Preset::Default)]
+    preset: Preset,
+    /// Fine-tuning rounds (k_max).
+    #[arg(long)]
+    iters: Option<usize>,
+    /// Maximum tangency points per sphere (n_max).
+    #[arg(long)]
+    max_points: Option<usize>,
+    /// Seed of every random choice.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Rasterize on the GPU.
+    #[arg(long, value_enum, default_value_t = Gpu::Off)]
+    gpu: Gpu,
+}
+
+impl Tuning {
+    fn params(&self) -> Params {
+        let mut p = match self.preset {
+            Preset::Default => Params::default(),
+            Preset::Paper => Params::paper_table(),
+            Preset::Fast => Params::fast(),
+        };
+        if let Some(k) = self.iters {
+            p.k_max = k;
+        }
+        if let Some(m) = self.max_points {
+            p.n_max = m;
+        }
+        if let Some(s) = self.seed {
+            p.seed = s;
+        }
+        p.gpu = !matches!(self.gpu, Gpu::Off);
+        p
+    }
+}
+
+/// Reconstruct with a progress bar over the stages.
+fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::Reconstruction> {
+    let bar = ui.progress(params.k_max as u64 + 2, "rfta");
+    let b = bar.clone();
+    let mut progress = move |stage: Stage| match stage {
+        Stage::Initial => b.set_message("initial"),
+        Stage::FineTune { round, of } => {
+            b.set_message(format!("round {round}/{of}"));
+            b.inc(1);
+        }
+        Stage::Final => {
+            b.set_message("final");
+            b.inc(1);
+        }
+    };
+    let out = rfta::reconstruct_with_progress(samples, params, &mut progress);
+    bar.finish_and_clear();
+    Ok(out?)
+}
+
+fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
+    let r = &out.report;
+    ui.detail(format!(
+        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; points per round {:?}; {} spheres without a point",
+        r.samples, r.negative, r.raster_res, r.empty_space_points, r.feasible_initial, r.points_per_round, r.spheres_without_point
+    ));
+    for (stage, t) in &r.timings {
+        ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));
+    }
+    if let Some(why) = &r.stopped_early {
+        ui.say(format!("warning: fine-tuning stopped early ({why})"));
+    }
+    let topo = rfta_mesh::Topology::of(&out.mesh);
+    ui.say(format!(
+        "{} vertices, {} faces, {} component(s), {} in {seconds:.2} s",
+        out.mesh.n_vertices(),
+        out.mesh.n_faces(),
+        topo.components,
+        if topo.is_watertight() {
+            "watertight"
+        } else {
+            "NOT watertight"
+        },
+    ));
+}
+
+pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
+    let samples = rfta_io::read_sdf(&args.input, args.bounds)?.validate(&args.input)?;
+    let mut params = args.tuning.params();
+    params.clamp = args.clamp;
+    let t = Instant::now();
+    let out = run_pipeline(&samples, &params, ui)
+        .with_context(|| format!("{}: reconstruction failed", args.input.display()))?;
+    describe(&out, ui, t.elapsed().as_secs_f64());
+    write(&args.output, &out.mesh, ui)
+}
+
+fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
+    if mesh.vertices.iter().any(|v| !v.is_finite()) {
+        bail!("internal error: the mesh has non-finite vertices; nothing written");
+    }
+    rfta_io::write_mesh(path, mesh)?;
+    ui.say(format!("wrote {}", path.display()));
+    Ok(())
+}
+
+/// Two tori side by side, overlapping: genus 2. The minimum of their exact signed distances is
+/// exact outside and a lower bound on the distance inside, so its spheres never cross the surface.
+fn two_tori(p: DVec3) -> f64 {
+    let torus = |q: DVec3| {
+        let ring = (q.x * q.x + q.y * q.y).sqrt() - 0.35;
+        (ring * ring + q.z * q.z).sqrt() - 0.15
+    };
+    torus(p - DVec3::new(-0.4, 0.0, 0.0)).min(torus(p - DVec3::new(0.4, 0.0, 0.0)))
+}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct DemoArgs {
+    /// Output mesh.
+    #[arg(short, long, default_value = "demo.obj")]
+    output: PathBuf,
+    /// Grid cells per axis over [-1, 1]^3.
+    #[arg(long, default_value_t = 20)]
+    res: usize,
+    #[command(flatten)]
+    tuning: Tuning,
+}
+
+pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
+    if args.res < 2 {
+        bail!("--res must be at least 2");
+    }
+    let grid = Grid::cube(args.res, -1.0, 1.0)?;
+    let values: Vec<f64> = (0..grid.len())
+        .map(|i| two_tori(grid.position(i)))
+        .collect();
+    let samples = SdfSamples::grid(grid, values.clone())?;
+    ui.say(format!(
+        "demo: two overlapping tori (genus 2) sampled on a {0}^3 grid ({1} samples)",
+        args.res + 1,
+        grid.len()
+    ));
+    let params = args.tuning.params();
+    let t = Instant::now();
+    let out = run_pipeline(&samples, &params, ui)?;
+    describe(&out, ui, t.elapsed().as_secs_f64());
+    let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
+    let err = |m: &TriMesh| {
+        let d: Vec<f64> = m.vertices.iter().map(|&v| two_tori(v).abs()).collect();
+        (
+            d.iter().sum::<f64>() / d.len().max(1) as f64,
+            d.iter().copied().fold(0.0, f64::max),
+        )
+    };
+    let (rm, rx) = err(&out.mesh);
+    let (mm, mx) = err(&mc);
+    let genus = rfta_mesh::Topology::of(&out.mesh).genus();
+    ui.say(format!(
+        "distance of vertices to the true surface, mean / max: rfta {rm:.4} / {rx:.4}, marching cubes {mm:.4} / {mx:.4} (grid spacing {:.4}); genus {}",
+        2.0 / args.res as f64,
+        genus.map_or("n/a (several components)".into(), |g| g.to_string())
+    ));
+    write(&args.output, &out.mesh, ui)
+}

@@ -1,0 +1,438 @@
+//! Tangency points of Reach for the Arcs (Sellán, Ren, Batty and Stein, SIGGRAPH 2024, §4): every
+//! SDF sample `(p_i, s_i)` is a sphere of radius `|s_i|` that the surface must touch without
+//! entering; this crate finds one point on each sphere that no other sphere covers, moves those
+//! points toward a reconstructed mesh, and orients them. It never calls the surface
+//! reconstruction itself: the pipeline crate `rfta` alternates the two.
+//!
+//! - [`initial_points`]: the nearest empty-space sample to each sphere, projected onto it and made
+//!   feasible by [`local_search`] (at most `local_search_iters` moves to circle and triple points
+//!   with the spheres that cover it).
+//! - [`fine_tune`]: one fine-tuning round against a mesh: the cut / miss / tangent cases with the
+//!   tolerance band, up to `n_max` points per sphere with the severe rule, a second chance for
+//!   spheres without a point, then feasibility again.
+//! - [`transport`]: geodesic transport by arc length `tau` with halving until feasible.
+//!
+//! Coordinates are the pipeline's normalized unit box (the tolerances are in those units).
+//! Every sphere is processed independently from immutable shared state, and outputs are
+//! concatenated in sphere order, so results do not depend on the thread count.
+//!
+//! # Example
+//! ```
+//! use rfta_geom::{Sphere, glam::DVec3};
+//! use rfta_sphere_tree::SphereTree;
+//! use rfta_feasible::{Params, local_search};
+//!
+//! // Two overlapping spheres; a point on sphere 0 that lies inside sphere 1 moves to their
+//! // intersection circle, where it is feasible.
+//! let spheres = [Sphere::new(DVec3::ZERO, 1.0), Sphere::new(DVec3::new(1.5, 0.0, 0.0), 1.0)];
+//! let tree = SphereTree::new(&spheres);
+//! let params = Params { k_search: 4, ..Params::default() };
+//! let x = local_search(&spheres, &tree, 0, DVec3::new(1.0, 0.0, 0.0), &params).expect("feasible");
+//! assert!(((x - spheres[0].center).length() - 1.0).abs() < 1e-12);
+//! assert!((x - spheres[1].center).length() >= 1.0 - 1e-9);
+//! ```
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use rfta_geom::glam::DVec3;
+use rfta_geom::kernels::{
+    SphereSphere, closest_point_on_circle, fallback_perpendicular, project_onto_sphere,
+    sphere_sphere_circle, transport_on_sphere, trilaterate,
+};
+use rfta_geom::{Sphere, TriMesh};
+use rfta_mesh::MeshIndex;
+use rfta_sphere_tree::SphereTree;
+
+/// Parameters, in normalized unit-box units. Defaults are the reference implementation's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// Tolerance of the inside tests (`1e-4`).
+    pub tol: f64,
+    /// Moves of the feasibility local search (20).
+    pub local_search_iters: usize,
+    /// Spheres considered per move: the reference uses `ceil(2 n^(1/3))` over all `n` samples
+    /// (see [`Params::k_search_for`]).
+    pub k_search: usize,
+    /// Arc length of one transport step (`0.01`).
+    pub tau: f64,
+    /// Maximum points per sphere (3; the paper's Table 2 used 30).
+    pub n_max: usize,
+    /// Spheres with `|s| >= clamp` get no point (a clamped SDF); `+inf` for none.
+    pub clamp: f64,
+    /// A cut is severe when the mesh comes within `severe * r` of the centre (0.8).
+    pub severe: f64,
+    /// Halvings of the transport step before giving up (20).
+    pub halvings: usize,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            tol: 1e-4,
+            local_search_iters: 20,
+            k_search: 22,
+            tau: 0.01,
+            n_max: 3,
+            clamp: f64::INFINITY,
+            severe: 0.8,
+            halvings: 20,
+        }
+    }
+}
+
+impl Params {
+    /// The reference's `k_search = ceil(2 n^(1/3))` for `n` samples.
+    pub fn k_search_for(n: usize) -> usize {
+        (2.0 * (n as f64).cbrt()).ceil().max(1.0) as usize
+    }
+}
+
+/// Oriented tangency points, each owned by a sphere, sorted by owner.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TangentPoints {
+    /// Positions.
+    pub points: Vec<DVec3>,
+    /// Unit normals (outward from the surface, eq. (2) of the paper).
+    pub normals: Vec<DVec3>,
+    /// Index of the sphere each point lies on.
+    pub owners: Vec<u32>,
+}
+
+impl TangentPoints {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    fn from_per_sphere(items: Vec<Vec<(DVec3, DVec3)>>, owners: impl Iterator<Item = u32>) -> Self {
+        let mut out = Self::default();
+        for (list, owner) in items.into_iter().zip(owners) {
+            for (p, n) in list {
+                out.points.push(p);
+                out.normals.push(n);
+                out.owners.push(owner);
+            }
+        }
+        out
+    }
+}
+
+/// Outward surface normal at a tangency point `x` of sphere `i` with SDF value `s` (eq. (2)):
+/// away from the centre of an inside sphere, toward the centre of an outside one.
+pub fn normal_at(center: DVec3, s: f64, x: DVec3) -> DVec3 {
+    let d = x - center;
+    let len = d.length();
+    let dir = if len > f64::EPSILON {
+        d / len
+    } else {
+        DVec3::X
+    };
+    if s < 0.0 { dir } else { -dir }
+}
+
+/// Whether `y` lies strictly inside sphere `s` (the reference's `|y - c|^2 + eps <= r^2`).
+fn collides(y: DVec3, s: &Sphere) -> bool {
+    (y - s.center).length_squared() + f64::EPSILON <= s.radius * s.radius
+}
+
+fn in_unit_box(y: DVec3) -> bool {
+    y.cmpge(DVec3::ZERO).all() && y.cmple(DVec3::ONE).all()
+}
+
+/// Closest point to `x` on the circle where sphere `s` meets `other`; when they do not meet, the
+/// point of `s` facing `other`'s centre; when they coincide, `x` projected onto `s`.
+fn circle_point(s: &Sphere, other: &Sphere, x: DVec3) -> DVec3 {
+    match sphere_sphere_circle(s, other) {
+        SphereSphere::Circle(c) => closest_point_on_circle(&c, x),
+        SphereSphere::Coincident => project_onto_sphere(s, x),
+        SphereSphere::Separate | SphereSphere::Nested => {
+            let d = other.center - s.center;
+            let len = d.length();
+            let dir = if len > 0.0 {
+                d / len
+            } else {
+                fallback_perpendicular(DVec3::Z)
+            };
+            s.center + s.radius * dir
+        }
+    }
+}
+
+/// One collision-resolution move (the reference's `resolve_collisions_on_sphere`, 3D): a point on
+/// sphere `s` outside the candidate spheres (sorted by radius, ascending), found at triple points
+/// of `s` with pairs of candidates (inside the unit box) or on circles with one candidate; `x`
+/// unchanged when none qualifies. The first acceptable point in pair order is returned.
+pub fn resolve(s: &Sphere, x: DVec3, cands: &[Sphere]) -> DVec3 {
+    let free_of = |y: DVec3, skip: &[usize]| {
+        cands
+            .iter()
+            .enumerate()
+            .all(|(k, c)| skip.contains(&k) || !collides(y, c))
+    };
+    let out = match cands.len() {
+        0 => x,
+        1 => circle_point(s, &cands[0], x),
+        _ => {
+            let mut found = None;
+            'pairs: for i in 0..cands.len() {
+                for j in 0..i {
+                    match trilaterate(s, &cands[i], &cands[j]) {
+                        Some(pts) => {
+                            let ok: Vec<DVec3> = pts
+                                .into_iter()
+                                .filter(|&y| in_unit_box(y) && free_of(y, &[i, j]))
+                                .collect();
+                            if let Some(best) = ok.into_iter().min_by(|a, b| {
+                                (*a - x)
+                                    .length_squared()
+                                    .total_cmp(&(*b - x).length_squared())
+                            }) {
+                                found = Some(best);
+                                break 'pairs;
+                            }
+                        }
+                        None => {
+                            for k in [i, j] {
+                                let y = circle_point(s, &cands[k], x);
+                                if free_of(y, &[k]) {
+                                    found = Some(y);
+                                    break 'pairs;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            found.unwrap_or(x)
+        }
+    };
+    if out.is_finite() { out } else { x }
+}
+
+/// Make point `x` on sphere `i` feasible against the spheres in `tree`: at most
+/// `local_search_iters` moves, each resolving the up to `k_search` spheres that (nearly) contain
+/// it. `None` when it is still inside another sphere by more than `tol` after the last move.
+pub fn local_search(
+    spheres: &[Sphere],
+    tree: &SphereTree,
+    i: u32,
+    mut x: DVec3,
+    params: &Params,
+) -> Option<DVec3> {
+    let s = spheres[i as usize];
+    let mut buf = Vec::new();
+    for it in 0..=params.local_search_iters {
+        if !tree.inside_any(x, -params.tol, Some(i)) {
+            return Some(x);
+        }
+        if it == params.local_search_iters {
+            break;
+        }
+        tree.spheres_containing_into(x, params.k_search, params.tol, Some(i), &mut buf);
+        let mut cands: Vec<(f64, u32, Sphere)> = buf
+            .iter()
+            .map(|&(_, j)| (spheres[j as usize].radius, j, spheres[j as usize]))
+            .collect();
+        cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let list: Vec<Sphere> = cands.into_iter().map(|c| c.2).collect();
+        x = resolve(&s, x, &list);
+    }
+    None
+}
+
+/// Geodesic transport of `a` toward `q` on sphere `i` by arc length `tau`, halved until the
+/// result lies inside no other sphere of `tree` (at most `halvings` times); `q` if none works,
+/// for the feasibility pass to handle (the reference's behaviour).
+pub fn transport(
+    spheres: &[Sphere],
+    tree: &SphereTree,
+    i: u32,
+    a: DVec3,
+    q: DVec3,
+    params: &Params,
+) -> DVec3 {
+    let s = spheres[i as usize];
+    let tol = params.tol;
+    if (a - q).length() < tol || s.radius < tol || (a - s.center).length() < tol {
+        return a;
+    }
+    let chord = ((a - q).length() / (2.0 * s.radius)).min(1.0);
+    let mut arc = (params.tau / s.radius).min(2.0 * chord.asin()) * s.radius;
+    for _ in 0..params.halvings {
+        let y = transport_on_sphere(&s, a, q, arc);
+        if !tree.inside_any(y, -tol, Some(i)) {
+            return y;
+        }
+        arc *= 0.5;
+    }
+    q
+}
+
+/// Initial tangency points of one sign set (`set`: indices into `spheres` / `values`): for each
+/// sphere, the empty-space sample nearest its centre projected onto it, then [`local_search`]
+/// against `tree` (a batch of the same sign set). Spheres that end infeasible, are clamped, or have
+/// zero radius (a sample exactly on the surface gives no normal) get no point.
+pub fn initial_points(
+    spheres: &[Sphere],
+    values: &[f64],
+    set: &[u32],
+    empty_space: &[DVec3],
+    tree: &SphereTree,
+    params: &Params,
+) -> TangentPoints {
+    if empty_space.is_empty() || set.is_empty() {
+        return TangentPoints::default();
+    }
+    let pts: Vec<[f64; 3]> = empty_space.iter().map(|p| p.to_array()).collect();
+    let Ok(kd) = ImmutableKdTree::<f64, 3>::new_from_slice(&pts) else {
+        return TangentPoints::default();
+    };
+    let per: Vec<Vec<(DVec3, DVec3)>> = set
+        .par_iter()
+        .map(|&i| {
+            let s = spheres[i as usize];
+            let v = values[i as usize];
+            if s.radius >= params.clamp || s.radius <= 0.0 {
+                return Vec::new();
+            }
+            let nn = kd
+                .query(&s.center.to_array())
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute();
+            let w = empty_space[nn.item as usize];
+            let d = w - s.center;
+            let len = d.length();
+            let dir = if len > f64::EPSILON {
+                d / len
+            } else {
+                DVec3::X
+            };
+            let x0 = s.center + s.radius * dir;
+            match local_search(spheres, tree, i, x0, params) {
+                Some(x) => vec![(x, normal_at(s.center, v, x))],
+                None => Vec::new(),
+            }
+        })
+        .collect();
+    TangentPoints::from_per_sphere(per, set.iter().copied())
+}
+
+/// One fine-tuning round (the reference's `fine_tune_point_cloud_iter`): every sphere is compared
+/// with `mesh` (the reconstruction of `cloud`), its points are moved, added or dropped by the
+/// cut / miss / tangent rule, and every resulting point is made feasible against `tree` (a batch
+/// of all spheres). Spheres without a point get a second chance from their projection.
+pub fn fine_tune(
+    spheres: &[Sphere],
+    values: &[f64],
+    mesh: &TriMesh,
+    cloud: &TangentPoints,
+    tree: &SphereTree,
+    params: &Params,
+) -> TangentPoints {
+    let Ok(index) = MeshIndex::new(mesh) else {
+        return cloud.clone();
+    };
+    let n = spheres.len();
+    let tol = params.tol;
+    // Points owned by each sphere (the cloud is sorted by owner).
+    let mut start = vec![0usize; n + 1];
+    for &o in &cloud.owners {
+        start[o as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let point_closest: Vec<(DVec3, f64)> = if params.n_max > 1 {
+        cloud
+            .points
+            .par_iter()
+            .map(|&a| {
+                let c = index.closest_point(a);
+                (c.point, c.distance_squared.sqrt())
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let per: Vec<Vec<(DVec3, DVec3)>> = (0..n as u32)
+        .into_par_iter()
+        .map(|i| {
+            let s = spheres[i as usize];
+            let v = values[i as usize];
+            let r = s.radius;
+            let cp = index.closest_point(s.center);
+            let di = cp.distance_squared.sqrt();
+            let inside_mesh = index.winding_number(s.center) > 0.5;
+            let sigma = if v < 0.0 { -1.0 } else { 1.0 } * if inside_mesh { -1.0 } else { 1.0 };
+            let proj = |x: DVec3| {
+                let d = x - s.center;
+                let len = d.length();
+                let dir = if len > f64::EPSILON {
+                    d / len
+                } else {
+                    DVec3::X
+                };
+                s.center + r * sigma * dir
+            };
+            let qi = proj(cp.point);
+            let owned: Vec<usize> = (start[i as usize]..start[i as usize + 1]).collect();
+            let k = owned.len();
+            let mut emitted: Vec<DVec3> = Vec::new();
+            let cut = di < r - tol && r > tol;
+            let miss = di > r + tol && r > tol;
+            if k == 0 {
+                emitted.push(qi);
+            } else if cut || miss {
+                let closest = owned
+                    .iter()
+                    .copied()
+                    .min_by(|&a, &b| {
+                        (cloud.points[a] - qi)
+                            .length_squared()
+                            .total_cmp(&(cloud.points[b] - qi).length_squared())
+                            .then(a.cmp(&b))
+                    })
+                    .unwrap_or(owned[0]);
+                emitted.push(transport(
+                    spheres,
+                    tree,
+                    i,
+                    cloud.points[closest],
+                    qi,
+                    params,
+                ));
+                if cut && params.n_max > 1 {
+                    let mut by_distance = owned.clone();
+                    by_distance.sort_by(|&a, &b| {
+                        point_closest[a]
+                            .1
+                            .total_cmp(&point_closest[b].1)
+                            .then(a.cmp(&b))
+                    });
+                    let severe = di <= params.severe * r;
+                    let limit = if severe { k } else { k - 1 };
+                    for &a in by_distance.iter().take(limit.min(params.n_max - 1)) {
+                        let target = proj(point_closest[a].0);
+                        emitted.push(transport(spheres, tree, i, cloud.points[a], target, params));
+                    }
+                }
+            } else {
+                emitted.extend(owned.iter().map(|&a| cloud.points[a]));
+            }
+            if r >= params.clamp || r <= 0.0 {
+                return Vec::new();
+            }
+            emitted
+                .into_iter()
+                .filter_map(|x| local_search(spheres, tree, i, x, params))
+                .map(|x| (x, normal_at(s.center, v, x)))
+                .collect()
+        })
+        .collect();
+    TangentPoints::from_per_sphere(per, 0..n as u32)
+}

@@ -1,0 +1,462 @@
+//! Reach for the Arcs (Sellán, Ren, Batty and Stein, "Reach For the Arcs: Reconstructing Surfaces
+//! from SDFs via Tangent Points", SIGGRAPH 2024): a triangle mesh from signed distance samples.
+//!
+//! Every sample `(p_i, s_i)` is a sphere of radius `|s_i|` that the surface touches without
+//! entering. [`reconstruct`] normalizes the samples into the unit box, samples empty space next to
+//! the spheres of each sign by rasterization ([`raster`]), places one feasible tangency point per
+//! sphere ([`feasible::initial_points`]), then runs `k_max` rounds of screened Poisson
+//! reconstruction ([`spsr`]) and fine-tuning ([`feasible::fine_tune`]), and a final screened
+//! Poisson solve, whose mesh is mapped back to the input's coordinates.
+//!
+//! The defaults are the paper's ([`Params::default`]); [`Params::paper_table`] is the setting of
+//! its Table 2. Results are deterministic for a given seed, whatever the thread count.
+//!
+//! # Example
+//! ```
+//! use rfta::{Params, reconstruct};
+//! use rfta::geom::{Grid, SdfSamples};
+//!
+//! // A sphere of radius 0.5 sampled on a 13^3 grid over [-1, 1]^3.
+//! let grid = Grid::cube(12, -1.0, 1.0)?;
+//! let values = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
+//! let samples = SdfSamples::grid(grid, values)?;
+//! let params = Params { k_max: 2, ..Params::default() };
+//! let out = reconstruct(&samples, &params)?;
+//! let v = out.mesh.signed_volume();
+//! assert!((v - 0.5236).abs() < 0.05, "volume {v}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::time::{Duration, Instant};
+
+pub use rfta_feasible as feasible;
+pub use rfta_geom as geom;
+pub use rfta_raster as raster;
+pub use rfta_sphere_tree as sphere_tree;
+pub use rfta_spsr as spsr;
+
+use rfta_feasible::TangentPoints;
+use rfta_geom::glam::DVec3;
+use rfta_geom::rng::hash;
+use rfta_geom::{OrientedPoints, SdfSamples, Sphere, TriMesh};
+use rfta_sphere_tree::SphereTree;
+use rfta_spsr::SpsrParams;
+
+/// Errors of a reconstruction.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Too few spheres admit a feasible tangency point to define a surface.
+    #[error(
+        "only {feasible} of {spheres} spheres admit a tangency point, too few for a surface (are the values a signed distance?)"
+    )]
+    TooFewPoints {
+        /// Feasible points found.
+        feasible: usize,
+        /// Spheres (samples).
+        spheres: usize,
+    },
+    /// A parameter is out of range.
+    #[error("invalid parameter: {0}")]
+    InvalidParams(String),
+    /// Empty-space rasterization failed.
+    #[error("rasterization: {0}")]
+    Raster(#[from] rfta_raster::Error),
+    /// The final screened Poisson solve failed.
+    #[error("screened Poisson: {0}")]
+    Spsr(#[from] rfta_spsr::Error),
+    /// The thread pool could not be created.
+    #[error("could not start {threads} threads: {reason}")]
+    ThreadPool {
+        /// Requested threads.
+        threads: usize,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// Result alias of this crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Parameters. Lengths (`tau`, `tol`) are in the normalized unit box, as in the reference.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// Fine-tuning rounds (10).
+    pub k_max: usize,
+    /// Maximum tangency points per sphere (3).
+    pub n_max: usize,
+    /// Spheres in each feasibility batch, drawn with replacement (10^4; 0 = all).
+    pub batch: usize,
+    /// Screening weight of the Poisson solves (10).
+    pub screening: f64,
+    /// Depth of the Poisson solves (10, on a box 3.2 times the cloud, as the reference).
+    pub spsr_depth: u32,
+    /// Moves of the feasibility local search (20).
+    pub local_search_iters: usize,
+    /// Arc length of a transport step (0.01).
+    pub tau: f64,
+    /// Tolerance of the inside tests (1e-4).
+    pub tol: f64,
+    /// Rasterization resolution; `None` for the paper's `64 ceil(n^(1/3) / 16)`.
+    pub raster_res: Option<usize>,
+    /// The SDF was clamped at this magnitude: samples at or beyond it get no tangency point.
+    pub clamp: Option<f64>,
+    /// Seed of every random choice (raster jitter, batches).
+    pub seed: u64,
+    /// Rasterize on the GPU when the crate is built with feature `gpu` and an adapter exists.
+    pub gpu: bool,
+    /// Worker threads (`None`: rayon's global pool). The mesh does not depend on it.
+    pub threads: Option<usize>,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            k_max: 10,
+            n_max: 3,
+            batch: 10_000,
+            screening: 10.0,
+            spsr_depth: 10,
+            local_search_iters: 20,
+            tau: 0.01,
+            tol: 1e-4,
+            raster_res: None,
+            clamp: None,
+            seed: 3452,
+            gpu: false,
+            threads: None,
+        }
+    }
+}
+
+impl Params {
+    /// The setting of the paper's Table 2 (its evaluation script): 20 rounds, 30 points per sphere.
+    pub fn paper_table() -> Self {
+        Self {
+            k_max: 20,
+            n_max: 30,
+            ..Self::default()
+        }
+    }
+
+    /// gpytoolbox's default: 3 rounds.
+    pub fn fast() -> Self {
+        Self {
+            k_max: 3,
+            ..Self::default()
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidParams(m));
+        if self.n_max == 0 {
+            return bad("n_max must be at least 1".into());
+        }
+        if !(self.tau > 0.0 && self.tau.is_finite()) {
+            return bad(format!("tau must be finite and > 0, got {}", self.tau));
+        }
+        if !(self.tol >= 0.0 && self.tol.is_finite()) {
+            return bad(format!("tol must be finite and >= 0, got {}", self.tol));
+        }
+        if let Some(c) = self.clamp
+            && (c.is_nan() || c <= 0.0)
+        {
+            return bad(format!("clamp must be > 0, got {c}"));
+        }
+        if self.threads == Some(0) {
+            return bad("threads must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// A pipeline stage, for progress reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Empty-space sampling and initial tangency points.
+    Initial,
+    /// Fine-tuning round `round` (1-based) of `of`.
+    FineTune {
+        /// This round.
+        round: usize,
+        /// All rounds.
+        of: usize,
+    },
+    /// The final screened Poisson solve.
+    Final,
+}
+
+/// What a reconstruction did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Report {
+    /// Samples (spheres).
+    pub samples: usize,
+    /// Samples with `s < 0` and `s >= 0`.
+    pub negative: usize,
+    /// Samples with `s >= 0`.
+    pub non_negative: usize,
+    /// Rasterization resolution used.
+    pub raster_res: usize,
+    /// Empty-space points sampled (both signs).
+    pub empty_space_points: usize,
+    /// Spheres with a feasible initial tangency point.
+    pub feasible_initial: usize,
+    /// Tangency points before each fine-tuning round and at the end (`k_max + 1` entries unless
+    /// stopped early).
+    pub points_per_round: Vec<usize>,
+    /// Spheres without a tangency point at the end (clamped and zero-radius ones included).
+    pub spheres_without_point: usize,
+    /// Why fine-tuning stopped before `k_max` rounds, if it did.
+    pub stopped_early: Option<String>,
+    /// Wall time of each stage, in order.
+    pub timings: Vec<(String, Duration)>,
+}
+
+/// A reconstructed mesh and how it was made.
+#[derive(Debug, Clone)]
+pub struct Reconstruction {
+    /// The mesh, in the samples' coordinates, outward-oriented.
+    pub mesh: TriMesh,
+    /// The final tangency points, in the samples' coordinates.
+    pub points: TangentPoints,
+    /// Counts and timings.
+    pub report: Report,
+}
+
+/// Reconstruct a mesh from signed distance samples (negative inside).
+///
+/// # Errors
+/// [`Error::InvalidParams`], [`Error::TooFewPoints`] when fewer than 3 spheres admit a tangency
+/// point, [`Error::Raster`], [`Error::Spsr`] when the final solve fails, [`Error::ThreadPool`].
+pub fn reconstruct(samples: &SdfSamples, params: &Params) -> Result<Reconstruction> {
+    reconstruct_with_progress(samples, params, &mut |_| {})
+}
+
+/// [`reconstruct`], calling `progress` as each stage starts.
+///
+/// # Errors
+/// As [`reconstruct`].
+pub fn reconstruct_with_progress(
+    samples: &SdfSamples,
+    params: &Params,
+    progress: &mut (dyn FnMut(Stage) + Send),
+) -> Result<Reconstruction> {
+    params.validate()?;
+    match params.threads {
+        None => run(samples, params, progress),
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| Error::ThreadPool {
+                threads: t,
+                reason: e.to_string(),
+            })?
+            .install(|| run(samples, params, progress)),
+    }
+}
+
+/// The reference's normalization: subtract the per-axis minimum, divide by the largest extent.
+struct Normalization {
+    trans: DVec3,
+    scale: f64,
+}
+
+fn run(
+    samples: &SdfSamples,
+    params: &Params,
+    progress: &mut (dyn FnMut(Stage) + Send),
+) -> Result<Reconstruction> {
+    let mut report = Report {
+        samples: samples.len(),
+        ..Report::default()
+    };
+    let positions = samples.positions();
+    let lo = positions
+        .iter()
+        .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
+    let hi = positions
+        .iter()
+        .fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
+    let extent = (hi - lo).max_element();
+    let norm = Normalization {
+        trans: lo,
+        scale: if extent > 0.0 { extent } else { 1.0 },
+    };
+    let centers: Vec<DVec3> = positions
+        .iter()
+        .map(|&p| (p - norm.trans) / norm.scale)
+        .collect();
+    let values: Vec<f64> = samples.values().iter().map(|&s| s / norm.scale).collect();
+    let spheres: Vec<Sphere> = centers
+        .iter()
+        .zip(&values)
+        .map(|(&c, &s)| Sphere::new(c, s.abs()))
+        .collect();
+    let n = spheres.len();
+    let fparams = rfta_feasible::Params {
+        tol: params.tol,
+        local_search_iters: params.local_search_iters,
+        k_search: rfta_feasible::Params::k_search_for(n),
+        tau: params.tau,
+        n_max: params.n_max,
+        clamp: params.clamp.map_or(f64::INFINITY, |c| c / norm.scale),
+        ..rfta_feasible::Params::default()
+    };
+    let res = params
+        .raster_res
+        .unwrap_or_else(|| rfta_raster::default_resolution(n));
+    report.raster_res = res;
+    let backend = if params.gpu {
+        rfta_raster::Backend::Gpu
+    } else {
+        rfta_raster::Backend::Cpu
+    };
+
+    // Initial tangency points, one sign set at a time.
+    progress(Stage::Initial);
+    let t = Instant::now();
+    let neg: Vec<u32> = (0..n as u32)
+        .filter(|&i| values[i as usize] < 0.0)
+        .collect();
+    let pos: Vec<u32> = (0..n as u32)
+        .filter(|&i| values[i as usize] >= 0.0)
+        .collect();
+    report.negative = neg.len();
+    report.non_negative = pos.len();
+    let mut parts = Vec::new();
+    for (k, set) in [(1u64, &pos), (2u64, &neg)] {
+        if set.is_empty() {
+            continue;
+        }
+        let c: Vec<DVec3> = set.iter().map(|&i| centers[i as usize]).collect();
+        let r: Vec<f64> = set.iter().map(|&i| spheres[i as usize].radius).collect();
+        let raster = rfta_raster::RasterParams {
+            res,
+            seed: hash(params.seed, k),
+        };
+        let empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+        report.empty_space_points += empty.points.len();
+        let batch = draw_batch(set, params.batch, hash(params.seed, 10 + k));
+        let tree = SphereTree::with_indices(&spheres, &batch);
+        parts.push(rfta_feasible::initial_points(
+            &spheres,
+            &values,
+            set,
+            &empty.points,
+            &tree,
+            &fparams,
+        ));
+    }
+    let mut cloud = merge_by_owner(parts);
+    report.feasible_initial = cloud.len();
+    report.timings.push(("initial points".into(), t.elapsed()));
+    if cloud.len() < 3 {
+        return Err(Error::TooFewPoints {
+            feasible: cloud.len(),
+            spheres: n,
+        });
+    }
+
+    let spsr = SpsrParams {
+        depth: params.spsr_depth,
+        screening: params.screening,
+        threads: None,
+        ..SpsrParams::rfta_reference()
+    };
+    for round in 1..=params.k_max {
+        progress(Stage::FineTune {
+            round,
+            of: params.k_max,
+        });
+        report.points_per_round.push(cloud.len());
+        let t = Instant::now();
+        let tree = SphereTree::batch(
+            &spheres,
+            params.batch,
+            hash(params.seed, 100 + round as u64),
+        );
+        let mesh = match solve(&cloud, &spsr) {
+            Ok(m) => m,
+            Err(e) => {
+                report.stopped_early = Some(format!("round {round}: {e}"));
+                break;
+            }
+        };
+        let next = rfta_feasible::fine_tune(&spheres, &values, &mesh, &cloud, &tree, &fparams);
+        report
+            .timings
+            .push((format!("fine-tuning round {round}"), t.elapsed()));
+        if next.len() < 3 {
+            report.stopped_early = Some(format!(
+                "round {round}: only {} feasible points remained",
+                next.len()
+            ));
+            break;
+        }
+        cloud = next;
+    }
+    progress(Stage::Final);
+    report.points_per_round.push(cloud.len());
+    let t = Instant::now();
+    let mut mesh = solve(&cloud, &spsr)?;
+    report
+        .timings
+        .push(("final screened Poisson".into(), t.elapsed()));
+    let mut owners = cloud.owners.clone();
+    owners.dedup();
+    report.spheres_without_point = n - owners.len();
+    mesh.map_vertices(|v| v * norm.scale + norm.trans);
+    let points = TangentPoints {
+        points: cloud
+            .points
+            .iter()
+            .map(|&p| p * norm.scale + norm.trans)
+            .collect(),
+        normals: cloud.normals,
+        owners: cloud.owners,
+    };
+    Ok(Reconstruction {
+        mesh,
+        points,
+        report,
+    })
+}
+
+/// `b` indices drawn with replacement from `set` (all of it when `b` is 0 or at least its size).
+fn draw_batch(set: &[u32], b: usize, seed: u64) -> Vec<u32> {
+    if b == 0 || b >= set.len() {
+        return set.to_vec();
+    }
+    let mut rng = rfta_geom::rng::Rng::new(seed);
+    (0..b)
+        .map(|_| set[rng.below(set.len() as u64) as usize])
+        .collect()
+}
+
+fn merge_by_owner(parts: Vec<TangentPoints>) -> TangentPoints {
+    let mut all: Vec<(u32, DVec3, DVec3)> = parts
+        .into_iter()
+        .flat_map(|p| {
+            p.owners
+                .into_iter()
+                .zip(p.points)
+                .zip(p.normals)
+                .map(|((o, x), n)| (o, x, n))
+        })
+        .collect();
+    all.sort_by_key(|e| e.0);
+    TangentPoints {
+        owners: all.iter().map(|e| e.0).collect(),
+        points: all.iter().map(|e| e.1).collect(),
+        normals: all.iter().map(|e| e.2).collect(),
+    }
+}
+
+fn solve(
+    cloud: &TangentPoints,
+    spsr: &SpsrParams,
+) -> std::result::Result<TriMesh, rfta_spsr::Error> {
+    let pts = OrientedPoints::new(cloud.points.clone(), cloud.normals.clone(), None)
+        .map_err(|e| rfta_spsr::Error::DegenerateInput(format!("tangency points: {e}")))?;
+    Ok(rfta_spsr::reconstruct(&pts, spsr)?.mesh)
+}
