@@ -16,7 +16,7 @@ pub(crate) enum Preset {
     Default,
     /// The setting of the paper's Table 2: 20 rounds, 30 points per sphere.
     Paper,
-    /// gpytoolbox's default: 3 rounds.
+    /// gpytoolbox's defaults: 3 rounds, 3 points per sphere.
     Fast,
 }
 
@@ -66,6 +66,9 @@ pub(crate) struct Tuning {
     /// Rasterize on the GPU.
     #[arg(long, value_enum, default_value_t = Gpu::Off)]
     gpu: Gpu,
+    /// Remove closed islands smaller than this fraction of the sample spacing (0 keeps all).
+    #[arg(long)]
+    min_island: Option<f64>,
 }
 
 impl Tuning {
@@ -85,6 +88,9 @@ impl Tuning {
             p.seed = s;
         }
         p.gpu = !matches!(self.gpu, Gpu::Off);
+        if let Some(m) = self.min_island {
+            p.min_island = m;
+        }
         p
     }
 }
@@ -117,6 +123,12 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     ));
     for (stage, t) in &r.timings {
         ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));
+    }
+    if r.islands_removed > 0 {
+        ui.detail(format!(
+            "removed {} small closed island(s)",
+            r.islands_removed
+        ));
     }
     if let Some(why) = &r.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));

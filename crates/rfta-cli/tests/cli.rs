@@ -283,7 +283,10 @@ fn demo_reconstructs_the_genus_two_shape_better_than_marching_cubes() {
     let o = rfta(&["demo", "-o", s(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("marching cubes") && err.contains("watertight"), "{err}");
+    assert!(
+        err.contains("marching cubes") && err.contains("watertight"),
+        "{err}"
+    );
     let mesh = rfta_io::read_mesh(&out).expect("mesh");
     let topo = rfta_mesh::Topology::of(&mesh);
     assert!(topo.is_watertight() && topo.is_manifold(), "{topo:?}");

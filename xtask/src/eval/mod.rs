@@ -275,13 +275,14 @@ fn run_method(method: &str, grid: &Grid, values: &[f64]) -> Result<TriMesh, Stri
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
         "rfta" | "rfta-paper" => {
+            // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults.
             let params = if method == "rfta" {
-                rfta::Params::default()
+                rfta::Params::fast()
             } else {
                 rfta::Params::paper_table()
             };
-            let samples = rfta_geom::SdfSamples::grid(*grid, values.to_vec())
-                .map_err(|e| e.to_string())?;
+            let samples =
+                rfta_geom::SdfSamples::grid(*grid, values.to_vec()).map_err(|e| e.to_string())?;
             rfta::reconstruct(&samples, &params)
                 .map(|r| r.mesh)
                 .map_err(|e| e.to_string())
