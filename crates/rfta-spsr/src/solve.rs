@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
 use crate::basis::{AxisTables, combine};
-use crate::tree::{Level, Sample, corner};
+use crate::tree::{Level, Sample, corner, hats_in};
 use crate::{Boundary, SpsrParams};
 
 use crate::keys::NONE;
@@ -72,28 +72,6 @@ impl LevelSystem {
         let a = |axis: usize| &t[c[axis] as usize][(off[axis] + 1) as usize];
         combine(a(0), a(1), a(2)).0
     }
-}
-
-/// Hat weights of `u` inside the given cell of depth `d`.
-pub(crate) fn hats_in(u: DVec3, cell: [u32; 3], d: u32) -> [f64; 8] {
-    let n = f64::from(1u32 << d);
-    let t = [
-        (u.x * n - f64::from(cell[0])).clamp(0.0, 1.0),
-        (u.y * n - f64::from(cell[1])).clamp(0.0, 1.0),
-        (u.z * n - f64::from(cell[2])).clamp(0.0, 1.0),
-    ];
-    let mut w = [0.0; 8];
-    for (k, wk) in w.iter_mut().enumerate() {
-        let f = |axis: usize| {
-            if (k >> axis) & 1 == 1 {
-                t[axis]
-            } else {
-                1.0 - t[axis]
-            }
-        };
-        *wk = f(0) * f(1) * f(2);
-    }
-    w
 }
 
 fn cell_coords_of(u: DVec3, d: u32) -> [u32; 3] {

@@ -113,11 +113,16 @@ pub(crate) fn merge(points: &OrientedPoints, frame: &Frame, depth: u32) -> Vec<S
 /// eight hat values at its corners (corner `k` is offset `(k & 1, k >> 1 & 1, k >> 2 & 1)`).
 pub(crate) fn hat_weights(u: DVec3, d: u32) -> ([u32; 3], [f64; 8]) {
     let c = cell_of(u, d);
+    (c, hats_in(u, c, d))
+}
+
+/// Hat values at the eight corners of the given depth-`d` cell, at unit-cube point `u`.
+pub(crate) fn hats_in(u: DVec3, cell: [u32; 3], d: u32) -> [f64; 8] {
     let n = f64::from(1u32 << d);
     let t = [
-        (u.x * n - f64::from(c[0])).clamp(0.0, 1.0),
-        (u.y * n - f64::from(c[1])).clamp(0.0, 1.0),
-        (u.z * n - f64::from(c[2])).clamp(0.0, 1.0),
+        (u.x * n - f64::from(cell[0])).clamp(0.0, 1.0),
+        (u.y * n - f64::from(cell[1])).clamp(0.0, 1.0),
+        (u.z * n - f64::from(cell[2])).clamp(0.0, 1.0),
     ];
     let mut w = [0.0; 8];
     for (k, wk) in w.iter_mut().enumerate() {
@@ -130,7 +135,7 @@ pub(crate) fn hat_weights(u: DVec3, d: u32) -> ([u32; 3], [f64; 8]) {
         };
         *wk = f(0) * f(1) * f(2);
     }
-    (c, w)
+    w
 }
 
 /// Offset of corner `k` of a cell.
