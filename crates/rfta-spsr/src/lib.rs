@@ -10,7 +10,7 @@
 //! (degree-1 B-splines, the basis PoissonRecon uses by default and Reach for the Arcs runs),
 //! minimises `∫|∇χ - V|² + α Σ w (χ(p) - 1/2)²` with natural (Neumann) or zero (Dirichlet)
 //! boundary conditions. It is solved by a cascadic multigrid pass: conjugate gradients on the
-//! complete coarse grids, then a few multi-colour Gauss-Seidel sweeps per finer depth with the
+//! coarsest complete grids, then a few multi-colour Gauss-Seidel sweeps per depth with the
 //! coarser solution moved to the right-hand side. The iso-value is the weighted mean of `χ` at
 //! the samples, and the surface is extracted crack-free over the adaptive leaves.
 //!
@@ -132,11 +132,12 @@ pub struct SpsrParams {
     /// Target number of samples per node in the density-adaptive depth; raise it (15-20) for
     /// noisy input.
     pub samples_per_node: f64,
-    /// Depth up to which the tree is complete and the system is solved by conjugate gradients.
+    /// Depth up to which the tree is complete (a regular grid); the depths below it are solved by
+    /// conjugate gradients.
     pub full_depth: u32,
-    /// Gauss-Seidel sweeps per depth above `full_depth`.
+    /// Gauss-Seidel sweeps per depth from `full_depth` up.
     pub iterations: usize,
-    /// Conjugate-gradient iterations cap per complete depth.
+    /// Conjugate-gradient iterations cap per depth below `full_depth`.
     pub base_iterations: usize,
     /// Worker threads; `None` uses rayon's global pool. The result does not depend on it.
     pub threads: Option<usize>,
