@@ -226,6 +226,8 @@ pub fn local_search(
 ) -> Option<DVec3> {
     let s = spheres[i as usize];
     let mut buf = Vec::new();
+    let mut cands: Vec<(f64, u32)> = Vec::new();
+    let mut list: Vec<Sphere> = Vec::new();
     for it in 0..=params.local_search_iters {
         if !tree.inside_any(x, -params.tol, Some(i)) {
             return Some(x);
@@ -234,12 +236,12 @@ pub fn local_search(
             break;
         }
         tree.spheres_containing_into(x, params.k_search, params.tol, Some(i), &mut buf);
-        let mut cands: Vec<(f64, u32, Sphere)> = buf
-            .iter()
-            .map(|&(_, j)| (spheres[j as usize].radius, j, spheres[j as usize]))
-            .collect();
+        // Candidates by radius, ascending (ties by index), as the reference sorts them.
+        cands.clear();
+        cands.extend(buf.iter().map(|&(_, j)| (spheres[j as usize].radius, j)));
         cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let list: Vec<Sphere> = cands.into_iter().map(|c| c.2).collect();
+        list.clear();
+        list.extend(cands.iter().map(|&(_, j)| spheres[j as usize]));
         x = resolve(&s, x, &list);
     }
     None
@@ -380,7 +382,7 @@ pub fn fine_tune(
                 s.center + r * sigma * dir
             };
             let qi = proj(cp.point);
-            let owned: Vec<usize> = (start[i as usize]..start[i as usize + 1]).collect();
+            let owned = start[i as usize]..start[i as usize + 1];
             let k = owned.len();
             let mut emitted: Vec<DVec3> = Vec::new();
             let cut = di < r - tol && r > tol;
@@ -389,15 +391,14 @@ pub fn fine_tune(
                 emitted.push(qi);
             } else if cut || miss {
                 let closest = owned
-                    .iter()
-                    .copied()
+                    .clone()
                     .min_by(|&a, &b| {
                         (cloud.points[a] - qi)
                             .length_squared()
                             .total_cmp(&(cloud.points[b] - qi).length_squared())
                             .then(a.cmp(&b))
                     })
-                    .unwrap_or(owned[0]);
+                    .unwrap_or(owned.start);
                 emitted.push(transport(
                     spheres,
                     tree,
@@ -407,7 +408,7 @@ pub fn fine_tune(
                     params,
                 ));
                 if cut && params.n_max > 1 {
-                    let mut by_distance = owned.clone();
+                    let mut by_distance: Vec<usize> = owned.collect();
                     by_distance.sort_by(|&a, &b| {
                         point_closest[a]
                             .1
@@ -422,7 +423,7 @@ pub fn fine_tune(
                     }
                 }
             } else {
-                emitted.extend(owned.iter().map(|&a| cloud.points[a]));
+                emitted.extend(owned.map(|a| cloud.points[a]));
             }
             if r >= params.clamp || r <= 0.0 {
                 return Vec::new();

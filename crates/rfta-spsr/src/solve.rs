@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
 use crate::basis::{AxisTables, combine};
-use crate::tree::{Level, Sample, corner, hats_in};
+use crate::tree::{Level, Sample, cell_of, corner, hats_in};
 use crate::{Boundary, SpsrParams};
 
 use crate::keys::NONE;
@@ -72,10 +72,6 @@ impl LevelSystem {
         let a = |axis: usize| &t[c[axis] as usize][(off[axis] + 1) as usize];
         combine(a(0), a(1), a(2)).0
     }
-}
-
-fn cell_coords_of(u: DVec3, d: u32) -> [u32; 3] {
-    crate::tree::cell_of(u, d)
 }
 
 /// Build the per-depth systems: neighbour tables, screening cells and diagonals.
@@ -652,7 +648,7 @@ pub(crate) fn solve(
         for s in &sys.screen {
             let fc = if d > 0 {
                 let coarse = &levels[d - 1];
-                let cc = cell_coords_of(s.pos, d as u32 - 1);
+                let cc = cell_of(s.pos, d as u32 - 1);
                 match coarse.cell(ic(cc)) {
                     Some(ci) => {
                         let h = hats_in(s.pos, cc, d as u32 - 1);
@@ -702,7 +698,7 @@ pub(crate) fn evaluate(levels: &[Level], sol: &Solution, p: DVec3, base: u32) ->
     // Depths up to `base` are complete grids: their sum is interpolated from U_base.
     let start = base as usize;
     for (d, level) in levels.iter().enumerate().skip(start) {
-        let c = cell_coords_of(p, d as u32);
+        let c = cell_of(p, d as u32);
         let h = hats_in(p, c, d as u32);
         let vals = if d == start { &sol.u[d] } else { &sol.x[d] };
         match level.cell(ic(c)) {

@@ -41,9 +41,9 @@ fn same_mesh_at_one_and_two_threads() {
 }
 
 #[test]
-fn too_few_feasible_points_is_an_error() {
-    // One negative sample in a 3^3 grid: its sphere and a few others cannot carry a surface of
-    // their own, but the call must end in a result or a clear error, never a panic.
+fn a_single_negative_sample_gives_a_finite_mesh_or_an_error_never_a_panic() {
+    // One negative sample in a 3^3 grid (gpytoolbox issue 147's situation): the call must end
+    // in a finite mesh or an error that says something, never a panic.
     let grid = Grid::cube(2, -1.0, 1.0).expect("grid");
     let mut values = vec![1.0; grid.len()];
     values[13] = -0.2;
