@@ -23,15 +23,21 @@ pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<(
         }
         "ply" => {
             // A PLY holds a mesh (faces), SDF samples (a scalar) or oriented points (normals).
-            if let Ok(mesh) = rfta_io::read_mesh(path)
-                && !mesh.is_empty()
+            let mesh = rfta_io::read_mesh(path);
+            if let Ok(m) = &mesh
+                && !m.is_empty()
             {
-                return describe_mesh(path, &mesh);
+                return describe_mesh(path, m);
             }
             if let Ok(raw) = rfta_io::read_sdf(path, bounds) {
                 return describe_sdf(path, raw);
             }
-            let pts = rfta_io::read_oriented_points(path)?;
+            let pts = match (rfta_io::read_oriented_points(path), mesh) {
+                (Ok(pts), _) => pts,
+                // An empty mesh (rfta writes one when there is no surface).
+                (Err(_), Ok(m)) => return describe_mesh(path, &m),
+                (Err(e), Err(_)) => return Err(e.into()),
+            };
             println!("{}: oriented points", path.display());
             println!("  points      {}", pts.len());
             let b = pts.bounds();

@@ -1,7 +1,8 @@
 //! The `rfta` command-line tool.
 //!
 //! Exit status: 0 on success, 1 when the work failed (the message says which file and why),
-//! 2 for invalid command-line usage.
+//! 2 for invalid command-line usage, 3 when `reconstruct`'s input describes no surface (every
+//! value of one sign): an empty mesh is written and the reason printed.
 
 #![expect(
     clippy::print_stdout,
@@ -97,6 +98,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<reconstruct::NoSurface>() => {
+            eprintln!("no surface: {e}");
+            ExitCode::from(3)
+        }
         Err(e) => {
             // One line: the context chain joined, outermost first, without repeating a cause
             // that an outer message already quotes.

@@ -42,10 +42,88 @@ pub(crate) struct Args {
     #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = parse_bounds)]
     bounds: Option<rfta_io::GridBounds>,
     /// The SDF was clamped at this magnitude (samples at or beyond it get no tangency point).
+    /// Without it a clamp is detected from flat plateaus of the values (see --no-check).
     #[arg(long)]
     clamp: Option<f64>,
+    /// Do not inspect the values: reconstruct even from samples that are not a signed distance
+    /// (occupancy, random, rescaled values; a value beyond the samples' extent), and detect no
+    /// clamp.
+    #[arg(long)]
+    no_check: bool,
+    /// Refuse inputs whose estimated peak memory exceeds this (e.g. 8G, 512M; default: the
+    /// memory available now).
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    max_memory: Option<u64>,
     #[command(flatten)]
     tuning: Tuning,
+}
+
+/// The input describes no surface: an empty mesh was written. `main` exits with status 3.
+#[derive(Debug)]
+pub(crate) struct NoSurface(pub(crate) String);
+
+impl std::fmt::Display for NoSurface {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for NoSurface {}
+
+/// Parses a byte size: a number with an optional K, M, G or T suffix (powers of 1024).
+fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (num, mult) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => {
+            let m: u64 = match c.to_ascii_uppercase() {
+                'K' => 1 << 10,
+                'M' => 1 << 20,
+                'G' => 1 << 30,
+                'T' => 1 << 40,
+                'B' => 1,
+                _ => return Err(format!("'{s}': unknown unit '{c}' (use K, M, G or T)")),
+            };
+            (&t[..i], m)
+        }
+        _ => (t, 1),
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a size such as 8G or 512M"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("'{s}' must be a positive size"));
+    }
+    Ok((v * mult as f64) as u64)
+}
+
+/// Memory this process can still use: `MemAvailable` of /proc/meminfo, lowered to the cgroup's
+/// remaining allowance where one is set. `None` where neither can be read.
+fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
+    let avail = meminfo.as_deref().and_then(|m| {
+        m.lines()
+            .find(|l| l.starts_with("MemAvailable:"))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|kb| kb.parse::<u64>().ok())
+            .map(|kb| kb * 1024)
+    });
+    let read = |p: &str| {
+        std::fs::read_to_string(p)
+            .ok()
+            .and_then(|t| t.trim().parse::<u64>().ok())
+    };
+    let cgroup = match (
+        read("/sys/fs/cgroup/memory.max"),
+        read("/sys/fs/cgroup/memory.current"),
+    ) {
+        (Some(max), Some(cur)) => Some(max.saturating_sub(cur)),
+        _ => None,
+    };
+    match (avail, cgroup) {
+        (Some(a), Some(c)) => Some(a.min(c)),
+        (a, c) => a.or(c),
+    }
 }
 
 /// Options shared by `reconstruct` and `demo`.
@@ -133,13 +211,21 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     if let Some(why) = &r.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));
     }
-    let topo = rfta_mesh::Topology::of(&out.mesh);
+    for w in &r.warnings {
+        ui.say(format!("warning: {w}"));
+    }
+    if r.mesh.degenerate_removed > 0 {
+        ui.detail(format!(
+            "removed {} faces with a repeated vertex",
+            r.mesh.degenerate_removed
+        ));
+    }
     ui.say(format!(
         "{} vertices, {} faces, {} component(s), {} in {seconds:.2} s",
         out.mesh.n_vertices(),
         out.mesh.n_faces(),
-        topo.components,
-        if topo.is_watertight() {
+        r.mesh.components,
+        if r.mesh.watertight {
             "watertight"
         } else {
             "NOT watertight"
@@ -148,9 +234,44 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
 }
 
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
-    let samples = rfta_io::read_sdf(&args.input, args.bounds)?.validate(&args.input)?;
     let mut params = args.tuning.params();
     params.clamp = args.clamp;
+    params.check = !args.no_check;
+    params.memory_limit = args.max_memory.or_else(available_memory);
+    // Refuse an oversized grid from its header, before reading the data.
+    if let (Some(limit), Some(n)) = (params.memory_limit, rfta_io::peek_sdf_len(&args.input)?) {
+        let needed = rfta::estimate_peak_memory(n, &params);
+        if needed > limit {
+            bail!(
+                "{}: {n} samples need about {} of memory by rfta's estimate, but {} {}; use a coarser grid, or --max-memory to override",
+                args.input.display(),
+                rfta::format_bytes(needed),
+                rfta::format_bytes(limit),
+                if args.max_memory.is_some() {
+                    "is the --max-memory limit"
+                } else {
+                    "is available"
+                }
+            );
+        }
+    }
+    let raw = rfta_io::read_sdf(&args.input, args.bounds)?;
+    let samples = match raw.validate(&args.input) {
+        Ok(s) => s,
+        Err(rfta_io::Error::Geom {
+            source: source @ rfta::geom::Error::NoSignChange { .. },
+            ..
+        }) => {
+            write(&args.output, &TriMesh::default(), ui)?;
+            return Err(NoSurface(format!(
+                "{}: {source}; wrote an empty mesh to {}",
+                args.input.display(),
+                args.output.display()
+            ))
+            .into());
+        }
+        Err(e) => return Err(e.into()),
+    };
     let t = Instant::now();
     let out = run_pipeline(&samples, &params, ui)
         .with_context(|| format!("{}: reconstruction failed", args.input.display()))?;

@@ -55,7 +55,8 @@ pub enum Error {
     NoSignChange {
         /// Number of samples.
         n: usize,
-        /// "positive (outside)" or "negative (inside)".
+        /// Which: "positive (outside)", "negative (inside)", "zero", or "positive (outside) or
+        /// zero, none negative (inside)".
         sign: &'static str,
         /// Smallest value.
         min: f64,
@@ -80,6 +81,27 @@ pub enum Error {
     DegenerateNormal {
         /// Its index.
         index: usize,
+    },
+    /// Two samples at the same position carry different values: a distance function has one value
+    /// per point.
+    #[error(
+        "samples {first} and {second} are both at ({x}, {y}, {z}) but have different values ({first_value} and {second_value})"
+    )]
+    ConflictingSamples {
+        /// The first sample.
+        first: usize,
+        /// The second sample.
+        second: usize,
+        /// x coordinate of the shared position.
+        x: f64,
+        /// y coordinate.
+        y: f64,
+        /// z coordinate.
+        z: f64,
+        /// Value of the first sample.
+        first_value: f64,
+        /// Value of the second sample.
+        second_value: f64,
     },
     /// A weight is negative or non-finite.
     #[error("weight {index} is negative or not finite ({value})")]

@@ -188,7 +188,7 @@ impl SignBalance {
 /// Samples `(p_i, s_i)` of a signed distance function, negative inside, validated on construction.
 ///
 /// Every sample is finite, there are at least two, and the values describe a surface: some are
-/// negative and some positive, or some are exactly zero.
+/// negative (inside) and some positive or exactly zero (outside, or on the surface).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SdfSamples {
     layout: Layout,
@@ -224,7 +224,9 @@ impl SdfSamples {
     /// # Errors
     /// [`Error::LengthMismatch`] if the lengths differ, [`Error::TooFewSamples`] for fewer than two,
     /// [`Error::NonFiniteValue`] or [`Error::NonFinitePosition`] naming the first bad sample,
-    /// [`Error::NoSignChange`] when every value is positive or every value negative.
+    /// [`Error::NoSignChange`] when no value is negative, or every value is,
+    /// [`Error::ConflictingSamples`] when two samples share a position but not a value (exact
+    /// duplicates are accepted).
     pub fn scattered(positions: Vec<DVec3>, values: Vec<f64>) -> Result<Self> {
         if values.len() != positions.len() {
             return Err(Error::LengthMismatch {
@@ -244,6 +246,7 @@ impl SdfSamples {
             });
         }
         validate_values(&values)?;
+        check_coincident(&positions, &values)?;
         Ok(Self {
             layout: Layout::Scattered(positions),
             values,
@@ -313,6 +316,39 @@ impl SdfSamples {
     }
 }
 
+/// Samples at the same position must have the same value: sorts the indices by position (`-0.0`
+/// and `0.0` alike) and compares neighbours in that order, naming the first conflict by index.
+fn check_coincident(positions: &[DVec3], values: &[f64]) -> Result<()> {
+    let key = |p: DVec3| (p + DVec3::ZERO).to_array().map(f64::to_bits);
+    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
+    order.sort_unstable_by_key(|&i| (key(positions[i as usize]), i));
+    let mut conflict: Option<(usize, usize)> = None;
+    for w in order.windows(2) {
+        let (a, b) = (w[0] as usize, w[1] as usize);
+        if key(positions[a]) == key(positions[b]) && values[a] != values[b] {
+            let pair = (a.min(b), a.max(b));
+            if conflict.is_none_or(|c| pair < c) {
+                conflict = Some(pair);
+            }
+        }
+    }
+    match conflict {
+        None => Ok(()),
+        Some((first, second)) => {
+            let p = positions[first];
+            Err(Error::ConflictingSamples {
+                first,
+                second,
+                x: p.x,
+                y: p.y,
+                z: p.z,
+                first_value: values[first],
+                second_value: values[second],
+            })
+        }
+    }
+}
+
 fn validate_values(values: &[f64]) -> Result<()> {
     if values.len() < SdfSamples::MIN_SAMPLES {
         return Err(Error::TooFewSamples {
@@ -324,13 +360,15 @@ fn validate_values(values: &[f64]) -> Result<()> {
         return Err(Error::NonFiniteValue { index, value });
     }
     let b = SignBalance::of(values);
-    if b.zero == 0 && (b.negative == 0 || b.positive == 0) {
+    // An inside needs a negative sample; an outside a positive or zero one.
+    if b.negative == 0 || b.positive + b.zero == 0 {
         let min = values.iter().copied().fold(f64::INFINITY, f64::min);
         let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let sign = if b.negative == 0 {
-            "positive (outside)"
-        } else {
-            "negative (inside)"
+        let sign = match (b.negative, b.zero, b.positive) {
+            (0, 0, _) => "positive (outside)",
+            (0, _, 0) => "zero",
+            (0, _, _) => "positive (outside) or zero, none negative (inside)",
+            _ => "negative (inside)",
         };
         return Err(Error::NoSignChange {
             n: values.len(),
@@ -390,10 +428,20 @@ mod tests {
             SdfSamples::grid(g, vec![-0.5; 8]),
             Err(Error::NoSignChange { .. })
         ));
-        // A zero value lies on the surface: accepted.
+        // A zero value lies on the surface: accepted next to a negative one, but without one
+        // there is no inside.
         let mut zero = vec![0.5; 8];
         zero[0] = 0.0;
+        assert!(matches!(
+            SdfSamples::grid(g, zero.clone()),
+            Err(Error::NoSignChange { .. })
+        ));
+        zero[1] = -0.5;
         assert!(SdfSamples::grid(g, zero).is_ok());
+        assert!(matches!(
+            SdfSamples::grid(g, vec![0.0; 8]),
+            Err(Error::NoSignChange { sign: "zero", .. })
+        ));
         assert!(matches!(
             SdfSamples::scattered(vec![DVec3::ZERO], vec![-1.0]),
             Err(Error::TooFewSamples {
@@ -416,6 +464,25 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn coincident_samples_must_agree() {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, -0.0, 0.0), DVec3::X];
+        // Exact duplicates (also -0.0 against 0.0) are fine.
+        assert!(SdfSamples::scattered(p.clone(), vec![-0.5, 0.5, -0.5, 0.5]).is_ok());
+        let err = SdfSamples::scattered(p, vec![-0.5, 0.5, -0.5, 0.25]);
+        assert!(
+            matches!(
+                err,
+                Err(Error::ConflictingSamples {
+                    first: 1,
+                    second: 3,
+                    ..
+                })
+            ),
+            "{err:?}"
+        );
     }
 
     #[test]

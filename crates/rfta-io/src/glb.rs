@@ -21,9 +21,24 @@ const UNSIGNED_INT: u32 = 5125;
 
 pub(crate) fn to_bytes(mesh: &TriMesh) -> ParseResult<Vec<u8>> {
     if mesh.is_empty() {
-        return Err(ParseError::new(
-            "cannot write an empty mesh as glTF (an accessor needs count >= 1)",
-        ));
+        // An accessor needs count >= 1: an empty mesh is a scene without nodes, and no BIN chunk.
+        let doc = json!({
+            "asset": {"version": "2.0", "generator": "rfta"},
+            "scene": 0,
+            "scenes": [{"nodes": []}],
+        });
+        let mut json_bytes =
+            serde_json::to_vec(&doc).map_err(|e| ParseError::new(format!("glTF JSON: {e}")))?;
+        while json_bytes.len() % 4 != 0 {
+            json_bytes.push(b' ');
+        }
+        let total = (12 + 8 + json_bytes.len()) as u32;
+        let mut out = Vec::with_capacity(total as usize);
+        for word in [MAGIC, 2, total, json_bytes.len() as u32, CHUNK_JSON] {
+            out.extend_from_slice(&word.to_le_bytes());
+        }
+        out.extend_from_slice(&json_bytes);
+        return Ok(out);
     }
     let mut bin = Vec::with_capacity(mesh.n_vertices() * 12 + mesh.n_faces() * 12);
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);

@@ -49,8 +49,8 @@ pub use atomic::write_atomic;
 pub use error::{Error, Result};
 pub use npy::{NpyArray, parse_npy, write_npy_f64};
 pub use sdf::{
-    GridBounds, RawSdf, Sidecar, read_oriented_points, read_sdf, sidecar_path,
-    write_oriented_points_ply, write_sdf_grid,
+    GridBounds, RawSdf, SdfFormat, Sidecar, decode_oriented_points, decode_sdf, peek_sdf_len,
+    read_oriented_points, read_sdf, sidecar_path, write_oriented_points_ply, write_sdf_grid,
 };
 
 use std::path::Path;
@@ -101,12 +101,24 @@ impl MeshFormat {
 pub fn read_mesh(path: &Path) -> Result<TriMesh> {
     let format = MeshFormat::from_path(path)?;
     let bytes = read_bytes(path)?;
+    decode_mesh(&bytes, format, path)
+}
+
+/// Decodes a triangle mesh held in memory; `path` only names the data in error messages.
+///
+/// This is [`read_mesh`] without the file system: for data from an archive or a network, and for
+/// the fuzz targets. Every byte string gives a mesh or an error, never a panic.
+///
+/// # Errors
+/// [`Error::Parse`] if the bytes are malformed, [`Error::Geom`] if the mesh is not valid (e.g. a
+/// face index out of range, a non-finite vertex).
+pub fn decode_mesh(bytes: &[u8], format: MeshFormat, path: &Path) -> Result<TriMesh> {
     let parsed = match format {
-        MeshFormat::Obj => obj::parse(&bytes),
-        MeshFormat::Off => off::parse(&bytes),
-        MeshFormat::Ply => ply::parse_mesh(&bytes),
-        MeshFormat::Stl => stl::parse(&bytes),
-        MeshFormat::Glb => glb::parse(&bytes),
+        MeshFormat::Obj => obj::parse(bytes),
+        MeshFormat::Off => off::parse(bytes),
+        MeshFormat::Ply => ply::parse_mesh(bytes),
+        MeshFormat::Stl => stl::parse(bytes),
+        MeshFormat::Glb => glb::parse(bytes),
     };
     let mesh = parsed.map_err(|e| e.at(path))?;
     mesh.validate().map_err(|source| Error::Geom {

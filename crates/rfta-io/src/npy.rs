@@ -26,7 +26,22 @@ pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
     parse(bytes).map_err(|e| e.detail)
 }
 
-pub(crate) fn parse(bytes: &[u8]) -> ParseResult<NpyArray> {
+/// What the header of a `.npy` file says.
+pub(crate) struct Header {
+    pub(crate) shape: Vec<usize>,
+    big: bool,
+    size: usize,
+    fortran: bool,
+    descr: String,
+    /// Offset of the data section.
+    data_start: usize,
+    /// Values in the array (the product of the shape).
+    pub(crate) len: usize,
+}
+
+/// Parses the header of a `.npy` file from its first bytes (the whole file, or a prefix that
+/// holds the header).
+pub(crate) fn parse_header(bytes: &[u8]) -> ParseResult<Header> {
     if !bytes.starts_with(b"\x93NUMPY") {
         return Err(ParseError::new(
             "not a .npy file: missing the '\\x93NUMPY' magic",
@@ -89,7 +104,28 @@ pub(crate) fn parse(bytes: &[u8]) -> ParseResult<NpyArray> {
         .iter()
         .try_fold(1usize, |acc, &d| acc.checked_mul(d))
         .ok_or_else(|| ParseError::new(format!("shape {shape:?} is too large")))?;
-    let data = &bytes[start + header_len..];
+    Ok(Header {
+        shape,
+        big,
+        size,
+        fortran,
+        descr: descr.to_string(),
+        data_start: start + header_len,
+        len: n,
+    })
+}
+
+pub(crate) fn parse(bytes: &[u8]) -> ParseResult<NpyArray> {
+    let Header {
+        shape,
+        big,
+        size,
+        fortran,
+        descr,
+        data_start,
+        len: n,
+    } = parse_header(bytes)?;
+    let data = &bytes[data_start..];
     let expected = n
         .checked_mul(size)
         .ok_or_else(|| ParseError::new(format!("shape {shape:?} is too large")))?;

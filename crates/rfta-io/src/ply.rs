@@ -280,6 +280,10 @@ fn read_binary(body: &[u8], elements: &mut [Element], enc: Encoding) -> ParseRes
                 body.len() - pos
             )));
         }
+        if el.props.is_empty() {
+            // Records without properties take no bytes (a count of 10^18 must not loop).
+            continue;
+        }
         for p in &mut el.props {
             if let Column::Scalar(v) = &mut p.column {
                 v.reserve(el.count);

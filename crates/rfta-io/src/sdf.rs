@@ -93,12 +93,88 @@ impl RawSdf {
 /// # Errors
 /// [`Error::Io`], [`Error::Parse`] naming the file and the problem, [`Error::UnknownFormat`].
 pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
-    let ext = extension(path);
+    let format = SdfFormat::from_path(path)?;
     let bytes = read_bytes(path)?;
+    decode_sdf(&bytes, format, path, bounds)
+}
+
+/// The number of samples in an SDF file, read from its header without loading the data, for
+/// formats that have one (`.npy`); `None` for others. Lets a caller refuse an input too large for
+/// the machine before reading it.
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read, [`Error::Parse`] for a malformed header.
+pub fn peek_sdf_len(path: &Path) -> Result<Option<usize>> {
+    use std::io::Read;
+    if SdfFormat::from_path(path)? != SdfFormat::Npy {
+        return Ok(None);
+    }
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(1 << 20)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    let header = npy::parse_header(&head).map_err(|e| e.at(path))?;
+    Ok(Some(match header.shape.as_slice() {
+        &[n, 4] => n,
+        _ => header.len,
+    }))
+}
+
+/// Formats of SDF sample files, by extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SdfFormat {
+    /// NumPy `.npy`: a 3-D grid or `(n, 4)` rows `x y z s`.
+    Npy,
+    /// OpenEXR volume `.exr`.
+    Exr,
+    /// PLY point cloud with a per-vertex scalar.
+    Ply,
+    /// Text rows `x y z s` (`.csv`, `.xyz`, `.txt`).
+    Text,
+}
+
+impl SdfFormat {
+    /// The format of `path` from its extension (case-insensitive).
+    ///
+    /// # Errors
+    /// [`Error::UnknownFormat`] for a missing or unsupported extension.
+    pub fn from_path(path: &Path) -> Result<Self> {
+        match extension(path).as_deref() {
+            Some("npy") => Ok(Self::Npy),
+            Some("exr") => Ok(Self::Exr),
+            Some("ply") => Ok(Self::Ply),
+            Some("csv" | "xyz" | "txt") => Ok(Self::Text),
+            _ => Err(Error::UnknownFormat {
+                path: path.to_path_buf(),
+                expected: "SDF samples: .npy, .exr, .ply, .csv, .xyz, .txt",
+            }),
+        }
+    }
+}
+
+/// Decodes SDF samples held in memory, as [`read_sdf`]; `path` names the data in error messages
+/// and locates the sidecar of a grid (none is read if it does not exist).
+///
+/// Every byte string gives samples or an error, never a panic (the fuzz targets check this).
+///
+/// # Errors
+/// As [`read_sdf`].
+pub fn decode_sdf(
+    bytes: &[u8],
+    format: SdfFormat,
+    path: &Path,
+    bounds: Option<GridBounds>,
+) -> Result<RawSdf> {
     let at = |e: ParseError| e.at(path);
-    match ext.as_deref() {
-        Some("npy") => {
-            let arr = npy::parse(&bytes).map_err(at)?;
+    match format {
+        SdfFormat::Npy => {
+            let arr = npy::parse(bytes).map_err(at)?;
             match arr.shape.as_slice() {
                 &[nx, ny, nz] => {
                     let dims = [nx, ny, nz];
@@ -127,8 +203,8 @@ pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
                 .at(path)),
             }
         }
-        Some("exr") => {
-            let vol = exr_volume::parse(&bytes).map_err(at)?;
+        SdfFormat::Exr => {
+            let vol = exr_volume::parse(bytes).map_err(at)?;
             let (grid, source) = resolve_grid(path, vol.dims, bounds, vol.origin_spacing)?;
             let [nx, ny, nz] = vol.dims;
             Ok(RawSdf {
@@ -138,8 +214,8 @@ pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
                 bounds_source: source,
             })
         }
-        Some("ply") => {
-            let p = ply::parse(&bytes).map_err(at)?;
+        SdfFormat::Ply => {
+            let p = ply::parse(bytes).map_err(at)?;
             let positions = p.positions().map_err(at)?;
             let values = p.vertex_scalar(&["sdf", "value", "scalar"]).map_err(at)?;
             Ok(RawSdf {
@@ -149,8 +225,8 @@ pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
                 bounds_source: "samples",
             })
         }
-        Some("csv" | "xyz" | "txt") => {
-            let (positions, values) = parse_rows(&bytes).map_err(at)?;
+        SdfFormat::Text => {
+            let (positions, values) = parse_rows(bytes).map_err(at)?;
             Ok(RawSdf {
                 description: format!("text scattered samples, {} rows", positions.len()),
                 layout: Layout::Scattered(positions),
@@ -158,10 +234,6 @@ pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
                 bounds_source: "samples",
             })
         }
-        _ => Err(Error::UnknownFormat {
-            path: path.to_path_buf(),
-            expected: "SDF samples: .npy, .exr, .ply, .csv, .xyz, .txt",
-        }),
     }
 }
 
@@ -315,16 +387,30 @@ pub fn write_sdf_grid(path: &Path, grid: &Grid, values: &[f64]) -> Result<()> {
 /// [`Error::Io`], [`Error::Parse`], [`Error::UnknownFormat`], or [`Error::Geom`] for NaN
 /// positions or zero normals.
 pub fn read_oriented_points(path: &Path) -> Result<OrientedPoints> {
-    let ext = extension(path);
+    if !matches!(
+        extension(path).as_deref(),
+        Some("ply" | "xyz" | "pts" | "txt" | "csv")
+    ) {
+        return decode_oriented_points(&[], path);
+    }
     let bytes = read_bytes(path)?;
+    decode_oriented_points(&bytes, path)
+}
+
+/// Decodes oriented points held in memory, as [`read_oriented_points`]; the extension of `path`
+/// picks the format and `path` names the data in error messages.
+///
+/// # Errors
+/// As [`read_oriented_points`].
+pub fn decode_oriented_points(bytes: &[u8], path: &Path) -> Result<OrientedPoints> {
     let at = |e: ParseError| e.at(path);
-    let (positions, normals) = match ext.as_deref() {
+    let (positions, normals) = match extension(path).as_deref() {
         Some("ply") => {
-            let p = ply::parse(&bytes).map_err(at)?;
+            let p = ply::parse(bytes).map_err(at)?;
             (p.positions().map_err(at)?, p.normals().map_err(at)?)
         }
         Some("xyz" | "pts" | "txt" | "csv") => {
-            let rows = parse_numeric_rows(&bytes, 6, "x y z nx ny nz").map_err(at)?;
+            let rows = parse_numeric_rows(bytes, 6, "x y z nx ny nz").map_err(at)?;
             rows.iter()
                 .map(|r| (DVec3::new(r[0], r[1], r[2]), DVec3::new(r[3], r[4], r[5])))
                 .unzip()

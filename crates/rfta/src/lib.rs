@@ -27,6 +27,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod check;
+
 use std::time::{Duration, Instant};
 
 pub use rfta_feasible as feasible;
@@ -59,6 +61,27 @@ pub enum Error {
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParams(String),
+    /// The values do not behave like a signed distance (see [`check`]): reconstructing from them
+    /// would give a wrong mesh. [`Params::check`] set to `false` reconstructs anyway.
+    #[error("the samples are not a signed distance function: {0}")]
+    NotADistance(String),
+    /// The input needs more memory than [`Params::memory_limit`] allows.
+    #[error(
+        "{samples} samples need about {} of memory by rfta's estimate, more than the limit of {}; use fewer samples (a coarser grid) or raise the limit",
+        format_bytes(*needed),
+        format_bytes(*limit)
+    )]
+    TooLarge {
+        /// Samples given.
+        samples: usize,
+        /// The estimate, bytes ([`estimate_peak_memory`]).
+        needed: u64,
+        /// The limit, bytes.
+        limit: u64,
+    },
+    /// The reconstructed mesh has a non-finite vertex (a bug; reported instead of written).
+    #[error("the reconstructed mesh has a non-finite vertex ({0}); please report this input")]
+    NonFiniteOutput(usize),
     /// Empty-space rasterization failed.
     #[error("rasterization: {0}")]
     Raster(#[from] rfta_raster::Error),
@@ -102,8 +125,20 @@ pub struct Params {
     pub tol: f64,
     /// Rasterization resolution; `None` for the paper's `64 ceil(n^(1/3) / 16)`.
     pub raster_res: Option<usize>,
-    /// The SDF was clamped at this magnitude: samples at or beyond it get no tangency point.
+    /// The SDF was clamped at this magnitude: samples at or beyond it get no tangency point and
+    /// their spheres are shrunk to this radius (the surface is at least that far). `None`: no
+    /// clamp unless [`Params::check`] detects one.
     pub clamp: Option<f64>,
+    /// Inspect the samples first ([`check::inspect`]): refuse values that are not a distance
+    /// (more than [`Params::max_inconsistent`] of the samples overlap a sample of the other sign by
+    /// more than [`check::SEVERE_RATIO`], or a value exceeds the samples' extent), warn about milder violations, and detect clamping
+    /// when `clamp` is `None`. Default `true`.
+    pub check: bool,
+    /// The fraction of severely inconsistent samples above which [`Params::check`] refuses (0.25).
+    pub max_inconsistent: f64,
+    /// Refuse, before any work, inputs whose [`estimate_peak_memory`] exceeds this many bytes
+    /// (`None`: no limit; the command-line tool passes the memory available).
+    pub memory_limit: Option<u64>,
     /// Seed of every random choice (raster jitter, batches).
     pub seed: u64,
     /// Rasterize on the GPU when the crate is built with feature `gpu` and an adapter exists.
@@ -130,6 +165,9 @@ impl Default for Params {
             tol: 1e-4,
             raster_res: None,
             clamp: None,
+            check: true,
+            max_inconsistent: 0.25,
+            memory_limit: None,
             seed: 3452,
             gpu: false,
             threads: None,
@@ -172,6 +210,12 @@ impl Params {
             && (c.is_nan() || c <= 0.0)
         {
             return bad(format!("clamp must be > 0, got {c}"));
+        }
+        if !(0.0..=1.0).contains(&self.max_inconsistent) {
+            return bad(format!(
+                "max_inconsistent must be in [0, 1], got {}",
+                self.max_inconsistent
+            ));
         }
         if self.threads == Some(0) {
             return bad("threads must be at least 1".into());
@@ -226,8 +270,34 @@ pub struct Report {
     pub islands_removed: usize,
     /// Why fine-tuning stopped before `k_max` rounds, if it did.
     pub stopped_early: Option<String>,
+    /// Samples that overlap a sample of the other sign (see [`check`]; 0 when not checked).
+    pub inconsistent_samples: usize,
+    /// The clamp used: [`Params::clamp`], or the one [`Params::check`] detected.
+    pub clamp: Option<f64>,
+    /// What the output mesh is like (checked before it is returned).
+    pub mesh: MeshCheck,
+    /// Things the caller should know: inconsistent samples, a detected clamp, spheres without a
+    /// point, a mesh that is not watertight.
+    pub warnings: Vec<String>,
     /// Wall time of each stage, in order.
     pub timings: Vec<(String, Duration)>,
+}
+
+/// Checks of the output mesh.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MeshCheck {
+    /// Faces with a repeated vertex index, removed.
+    pub degenerate_removed: usize,
+    /// Faces of zero area left in the mesh (distinct vertices at one position or on one line).
+    pub zero_area_faces: usize,
+    /// Every edge has exactly two faces.
+    pub watertight: bool,
+    /// Edges with one face.
+    pub boundary_edges: usize,
+    /// Edges with more than two faces.
+    pub nonmanifold_edges: usize,
+    /// Connected components.
+    pub components: usize,
 }
 
 /// A reconstructed mesh and how it was made.
@@ -260,6 +330,16 @@ pub fn reconstruct_with_progress(
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<Reconstruction> {
     params.validate()?;
+    if let Some(limit) = params.memory_limit {
+        let needed = estimate_peak_memory(samples.len(), params);
+        if needed > limit {
+            return Err(Error::TooLarge {
+                samples: samples.len(),
+                needed,
+                limit,
+            });
+        }
+    }
     match params.threads {
         None => run(samples, params, progress),
         Some(t) => rayon::ThreadPoolBuilder::new()
@@ -270,6 +350,39 @@ pub fn reconstruct_with_progress(
                 reason: e.to_string(),
             })?
             .install(|| run(samples, params, progress)),
+    }
+}
+
+/// An upper estimate of the peak resident memory, in bytes, of reconstructing from `n` samples
+/// (including the samples themselves), fitted to `/usr/bin/time -v` measurements of
+/// `rfta reconstruct` on grids of 33^3 to 129^3 samples (docs/hardening.md): a fixed 256 MiB
+/// (the depth-10 screened Poisson octree, thread stacks, the binary) plus 1.5 KiB per sample
+/// (positions, spheres, sphere tree, k-d trees, tangency points and their octree cells, the
+/// empty-space samples of a raster that grows with `n^(1/3)`), with `n_max` above 3 adding its
+/// extra tangency points.
+pub fn estimate_peak_memory(n: usize, params: &Params) -> u64 {
+    const BASE: u64 = 256 << 20;
+    const PER_SAMPLE: u64 = 1536;
+    const PER_EXTRA_POINT: u64 = 200;
+    let extra_points = params.n_max.saturating_sub(3) as u64;
+    BASE.saturating_add(
+        (n as u64).saturating_mul(PER_SAMPLE.saturating_add(extra_points * PER_EXTRA_POINT)),
+    )
+}
+
+/// Bytes as "1.5 GiB".
+pub fn format_bytes(bytes: u64) -> String {
+    let units = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut v = bytes as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{bytes} B")
+    } else {
+        format!("{v:.1} {}", units[u])
     }
 }
 
@@ -286,8 +399,13 @@ fn run(
 ) -> Result<Reconstruction> {
     let mut report = Report {
         samples: samples.len(),
+        clamp: params.clamp,
         ..Report::default()
     };
+    if params.check {
+        inspect(samples, params, &mut report)?;
+    }
+    let clamp = report.clamp;
     let positions = samples.positions();
     let lo = positions
         .iter()
@@ -305,10 +423,11 @@ fn run(
         .map(|&p| (p - norm.trans) / norm.scale)
         .collect();
     let values: Vec<f64> = samples.values().iter().map(|&s| s / norm.scale).collect();
+    let cap = clamp.map_or(f64::INFINITY, |c| c / norm.scale);
     let spheres: Vec<Sphere> = centers
         .iter()
         .zip(&values)
-        .map(|(&c, &s)| Sphere::new(c, s.abs()))
+        .map(|(&c, &s)| Sphere::new(c, s.abs().min(cap)))
         .collect();
     let n = spheres.len();
     let fparams = rfta_feasible::Params {
@@ -317,7 +436,7 @@ fn run(
         k_search: rfta_feasible::Params::k_search_for(n),
         tau: params.tau,
         n_max: params.n_max,
-        clamp: params.clamp.map_or(f64::INFINITY, |c| c / norm.scale),
+        clamp: cap,
         ..rfta_feasible::Params::default()
     };
     let res = params
@@ -430,6 +549,25 @@ fn run(
         mesh = kept;
         report.islands_removed = removed;
     }
+    report.mesh = check_mesh(&mut mesh)?;
+    if report.spheres_without_point > 0 {
+        report.warnings.push(format!(
+            "{} of {n} spheres ended without a tangency point (clamped, zero-valued, or covered by other spheres)",
+            report.spheres_without_point
+        ));
+    }
+    if !report.mesh.watertight {
+        report.warnings.push(format!(
+            "the mesh is not watertight: {} boundary and {} non-manifold edges",
+            report.mesh.boundary_edges, report.mesh.nonmanifold_edges
+        ));
+    }
+    if report.mesh.zero_area_faces > 0 {
+        report.warnings.push(format!(
+            "the mesh has {} faces of zero area",
+            report.mesh.zero_area_faces
+        ));
+    }
     let points = TangentPoints {
         points: cloud
             .points
@@ -443,6 +581,80 @@ fn run(
         mesh,
         points,
         report,
+    })
+}
+
+/// Runs [`check::inspect`] and applies [`Params::check`]'s policy.
+fn inspect(samples: &SdfSamples, params: &Params, report: &mut Report) -> Result<()> {
+    let found = check::inspect(samples);
+    report.inconsistent_samples = found.inconsistent;
+    if params.clamp.is_none()
+        && let Some((c, count)) = found.clamp
+    {
+        report.clamp = Some(c);
+        report.warnings.push(format!(
+            "the values look clamped at {c}: {count} samples sit on flat plateaus at that magnitude; they are treated as at least {c} from the surface (set a clamp to override, or turn the check off)"
+        ));
+    }
+    if let Some(&i) = found
+        .beyond_extent
+        .iter()
+        .find(|&&i| report.clamp.is_none_or(|c| samples.values()[i].abs() < c))
+    {
+        let b = samples.bounds();
+        return Err(Error::NotADistance(format!(
+            "{} exceeds the diagonal {} of the samples' bounding box, which no distance to a surface crossing them can ({} such samples); if it stands for 'far away', set a clamp below it so such samples count as at least that far",
+            check::describe(samples, i),
+            (b.max - b.min).length(),
+            found.beyond_extent.len()
+        )));
+    }
+    if found.inconsistent > 0 {
+        let worst = found.worst.map_or(String::new(), |(i, j, r)| {
+            format!(
+                "; worst: {} and {} are {:.3e} apart, their spheres overlap by a factor {r:.3}",
+                check::describe(samples, i),
+                check::describe(samples, j),
+                (samples.position(i) - samples.position(j)).length()
+            )
+        });
+        let what = format!(
+            "{} of {} samples ({:.1}%) overlap the nearest sample of the other sign, so |s| is larger than the distance to the surface there{worst}",
+            found.inconsistent,
+            found.checked,
+            100.0 * found.inconsistent_fraction()
+        );
+        if found.severe_fraction() > params.max_inconsistent {
+            return Err(Error::NotADistance(format!(
+                "{what}; {:.1}% overlap by more than a factor {}. Is it an occupancy, density or rescaled field? Turn the check off to reconstruct anyway",
+                100.0 * found.severe_fraction(),
+                check::SEVERE_RATIO
+            )));
+        }
+        report.warnings.push(what);
+    }
+    Ok(())
+}
+
+/// Removes faces with a repeated vertex, refuses non-finite vertices and reports topology.
+fn check_mesh(mesh: &mut TriMesh) -> Result<MeshCheck> {
+    if let Some(i) = mesh.vertices.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFiniteOutput(i));
+    }
+    let before = mesh.faces.len();
+    mesh.faces
+        .retain(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]);
+    let zero_area_faces = (0..mesh.faces.len())
+        .filter(|&f| mesh.face_normal_scaled(f).length_squared() == 0.0)
+        .count();
+    let topo = rfta_mesh::Topology::of(mesh);
+    Ok(MeshCheck {
+        degenerate_removed: before - mesh.faces.len(),
+        zero_area_faces,
+        watertight: topo.is_watertight(),
+        boundary_edges: topo.boundary_edges,
+        nonmanifold_edges: topo.nonmanifold_edges,
+        components: topo.components,
     })
 }
 

@@ -1,0 +1,95 @@
+//! Every input the fuzzers found (`fuzz/regressions/<target>/`) and every file of the bad-input
+//! corpus (`tests/bad_inputs/`) goes through every reader: each must return, with a mesh, samples
+//! or an error, without a panic and in well under a second.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use rfta_io::{MeshFormat, SdfFormat, decode_mesh, decode_oriented_points, decode_sdf};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn files(dir: &Path) -> Vec<PathBuf> {
+    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    out.retain(|p| p.is_file());
+    out.sort();
+    out
+}
+
+/// Runs `bytes` through every decoder, as the fuzz targets do; returns how many accepted it.
+fn every_reader(bytes: &[u8]) -> usize {
+    // A directory that does not exist: no sidecar is read.
+    let at = |ext: &str| PathBuf::from(format!("/nonexistent/rfta-regression/input.{ext}"));
+    let mut accepted = 0;
+    for (format, ext) in [
+        (MeshFormat::Obj, "obj"),
+        (MeshFormat::Off, "off"),
+        (MeshFormat::Ply, "ply"),
+        (MeshFormat::Stl, "stl"),
+        (MeshFormat::Glb, "glb"),
+    ] {
+        if let Ok(mesh) = decode_mesh(bytes, format, &at(ext)) {
+            assert!(mesh.validate().is_ok());
+            accepted += 1;
+        }
+    }
+    for (format, ext) in [
+        (SdfFormat::Npy, "npy"),
+        (SdfFormat::Exr, "exr"),
+        (SdfFormat::Ply, "ply"),
+        (SdfFormat::Text, "csv"),
+    ] {
+        if let Ok(raw) = decode_sdf(bytes, format, &at(ext), None) {
+            if let Ok(s) = raw.validate(&at(ext)) {
+                assert!(s.values().iter().all(|v| v.is_finite()));
+            }
+            accepted += 1;
+        }
+    }
+    for ext in ["ply", "xyz"] {
+        if decode_oriented_points(bytes, &at(ext)).is_ok() {
+            accepted += 1;
+        }
+    }
+    accepted
+}
+
+#[test]
+fn fuzzer_findings_and_the_bad_input_corpus_never_panic_or_hang() {
+    let mut dirs = vec![repo().join("tests/bad_inputs")];
+    if let Ok(d) = std::fs::read_dir(repo().join("fuzz/regressions")) {
+        let mut targets: Vec<PathBuf> = d.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        targets.sort();
+        dirs.extend(targets.into_iter().filter(|p| p.is_dir()));
+    }
+    let mut n = 0;
+    for dir in dirs {
+        for file in files(&dir) {
+            let bytes = std::fs::read(&file).expect("readable");
+            let t = Instant::now();
+            every_reader(&bytes);
+            assert!(
+                t.elapsed() < Duration::from_secs(2),
+                "{} took {:?}",
+                file.display(),
+                t.elapsed()
+            );
+            n += 1;
+        }
+    }
+    assert!(n >= 50, "only {n} files found");
+}
+
+#[test]
+fn a_ply_element_without_properties_and_a_huge_count_is_not_a_loop() {
+    // What the PLY fuzzer found first: `element te 5555555555555555555` with no properties in a
+    // binary file made the reader count to 5.6e18.
+    let bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement te 5555555555555555555\nend_header\n\0\0\0\0\0\0\0\0\0\0\0\0";
+    let t = Instant::now();
+    let _ = decode_mesh(bytes, MeshFormat::Ply, Path::new("x.ply"));
+    assert!(t.elapsed() < Duration::from_secs(1));
+}

@@ -1,0 +1,184 @@
+//! Checks that samples behave like a signed distance before they are trusted as one.
+//!
+//! Reach for the Arcs takes every `|s_i|` as the exact distance to the surface. Values that are not
+//! (an occupancy or random field, an SDF clamped at some band, a sentinel such as `1e30` for
+//! "far") give spheres that contradict each other or the surface, and a mesh that is wrong without
+//! any error. Two properties of a true signed distance `f` are cheap to test:
+//!
+//! * **Separation.** A negative sample `i` and a positive sample `j` lie on either side of the
+//!   surface, so their empty spheres do not overlap: `|s_i| + |s_j| <= |p_i - p_j|` (the
+//!   1-Lipschitz bound across the surface). [`inspect`] measures the ratio
+//!   `(|s_i| + |s_j|) / |p_i - p_j|` against each sample's nearest sample of the other sign; a
+//!   true SDF keeps it at or below 1, up to rounding.
+//! * **Unit gradient.** Almost everywhere `|grad f| = 1`, so on a grid with spacing `h` a sample at
+//!   distance at least `h` from the surface has an axis neighbour whose value differs by at least
+//!   `h / sqrt(3)`. Samples whose six neighbours all carry exactly their value, at the largest
+//!   magnitude of their sign, are the flat plateau of a clamped (truncated) SDF.
+//!
+//! Neither test needs the surface. Both run in `O(n log n)`.
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use rfta_geom::SdfSamples;
+use rfta_geom::glam::DVec3;
+
+/// A separation ratio above this counts as a violation (1% above the exact bound of 1).
+pub const SEPARATION_TOLERANCE: f64 = 1.01;
+
+/// A separation ratio above this is a severe violation: the spheres overlap by a quarter of the
+/// distance between the samples. Noise of 5% of the values, or of 5% of a grid spacing, stays
+/// below 1.1; occupancy, random and rescaled fields go far beyond.
+pub const SEVERE_RATIO: f64 = 1.25;
+
+/// What [`inspect`] found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Inspection {
+    /// Samples that have a sample of the other sign to compare with (zero values are skipped).
+    pub checked: usize,
+    /// Samples whose separation ratio exceeds [`SEPARATION_TOLERANCE`].
+    pub inconsistent: usize,
+    /// Samples whose separation ratio exceeds [`SEVERE_RATIO`].
+    pub severe: usize,
+    /// The worst pair: `(i, j, ratio)`, `i` the sample with the larger `|s|`.
+    pub worst: Option<(usize, usize, f64)>,
+    /// Samples whose `|s|` exceeds the diagonal of the samples' bounding box: with a sign change
+    /// present no distance function sampled in that box has such a value (a sentinel for "far"?).
+    pub beyond_extent: Vec<usize>,
+    /// A clamping magnitude, if the values look clamped (see the module docs), with the number of
+    /// plateau samples that show it.
+    pub clamp: Option<(f64, usize)>,
+}
+
+impl Inspection {
+    /// The fraction of checked samples that are inconsistent.
+    pub fn inconsistent_fraction(&self) -> f64 {
+        self.inconsistent as f64 / self.checked.max(1) as f64
+    }
+
+    /// The fraction of checked samples that are severely inconsistent.
+    pub fn severe_fraction(&self) -> f64 {
+        self.severe as f64 / self.checked.max(1) as f64
+    }
+}
+
+/// Measures how far `samples` are from a signed distance function (see the module docs).
+pub fn inspect(samples: &SdfSamples) -> Inspection {
+    let values = samples.values();
+    let positions = samples.positions();
+    let bounds = samples.bounds();
+    let diag = (bounds.max - bounds.min).length();
+    let mut out = Inspection {
+        beyond_extent: (0..values.len())
+            .filter(|&i| values[i].abs() > diag)
+            .collect(),
+        ..Inspection::default()
+    };
+    let neg: Vec<usize> = (0..values.len()).filter(|&i| values[i] < 0.0).collect();
+    let pos: Vec<usize> = (0..values.len()).filter(|&i| values[i] > 0.0).collect();
+    if !neg.is_empty() && !pos.is_empty() {
+        let mut ratios: Vec<(usize, usize, f64)> = Vec::with_capacity(neg.len() + pos.len());
+        for (from, to) in [(&neg, &pos), (&pos, &neg)] {
+            let pts: Vec<[f64; 3]> = to.iter().map(|&j| positions[j].to_array()).collect();
+            let Ok(kd) = ImmutableKdTree::<f64, 3>::new_from_slice(&pts) else {
+                continue;
+            };
+            ratios.par_extend(from.par_iter().map(|&i| {
+                let nn = kd
+                    .query(&positions[i].to_array())
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute();
+                let j = to[nn.item as usize];
+                let d = nn.distance.sqrt();
+                let gap = values[i].abs() + values[j].abs();
+                let ratio = if d > 0.0 { gap / d } else { f64::INFINITY };
+                (i, j, ratio)
+            }));
+        }
+        out.checked = ratios.len();
+        out.inconsistent = ratios.iter().filter(|r| r.2 > SEPARATION_TOLERANCE).count();
+        out.severe = ratios.iter().filter(|r| r.2 > SEVERE_RATIO).count();
+        out.worst = ratios
+            .iter()
+            .filter(|r| r.2 > SEPARATION_TOLERANCE)
+            .max_by(|a, b| a.2.total_cmp(&b.2).then(b.0.cmp(&a.0)))
+            .map(|&(i, j, r)| {
+                if values[i].abs() >= values[j].abs() {
+                    (i, j, r)
+                } else {
+                    (j, i, r)
+                }
+            });
+    }
+    out.clamp = detect_clamp(samples);
+    out
+}
+
+/// Plateau samples at the extreme magnitude of each sign (grids: all six neighbours equal;
+/// scattered samples: exact ties), enough of them (8, and 0.1% of a grid or 5% of scattered
+/// samples) to rule out the symmetric ties of a true SDF.
+fn detect_clamp(samples: &SdfSamples) -> Option<(f64, usize)> {
+    let values = samples.values();
+    let n = values.len();
+    let max_pos = values.iter().copied().fold(0.0f64, f64::max);
+    let max_neg = values.iter().copied().fold(0.0f64, f64::min);
+    let mut found: Option<(f64, usize)> = None;
+    for extreme in [max_pos, max_neg] {
+        if extreme == 0.0 {
+            continue;
+        }
+        let (count, needed) = match samples.as_grid() {
+            Some(g) => {
+                let [nx, ny, nz] = g.dims();
+                let flat = |i: usize| {
+                    if values[i] != extreme {
+                        return false;
+                    }
+                    let [a, b, c] = g.ijk(i);
+                    let mut any = false;
+                    for (axis, len) in [(0usize, nx), (1, ny), (2, nz)] {
+                        let at = [a, b, c][axis];
+                        for step in [-1i64, 1] {
+                            let t = at as i64 + step;
+                            if t < 0 || t >= len as i64 {
+                                continue;
+                            }
+                            let mut ijk = [a, b, c];
+                            ijk[axis] = t as usize;
+                            any = true;
+                            if values[g.index(ijk[0], ijk[1], ijk[2])] != extreme {
+                                return false;
+                            }
+                        }
+                    }
+                    any
+                };
+                let count = (0..n).into_par_iter().filter(|&i| flat(i)).count();
+                (count, 8.max(n / 1000))
+            }
+            None => (
+                values.iter().filter(|&&v| v == extreme).count(),
+                8.max(n / 20),
+            ),
+        };
+        if count >= needed {
+            let c = extreme.abs();
+            found = Some(match found {
+                Some((d, k)) => (c.min(d), k + count),
+                None => (c, count),
+            });
+        }
+    }
+    found
+}
+
+/// Positions in the samples' own units, for messages.
+pub(crate) fn describe(samples: &SdfSamples, i: usize) -> String {
+    let p: DVec3 = samples.position(i);
+    format!(
+        "sample {i} at ({:.4}, {:.4}, {:.4}), value {}",
+        p.x,
+        p.y,
+        p.z,
+        samples.values()[i]
+    )
+}
