@@ -11,3 +11,6 @@ mod mc_reference;
 
 /// The reconstruction on an analytic torus.
 mod reconstruct;
+
+/// The bad-input corpus through the library.
+mod bad_inputs;

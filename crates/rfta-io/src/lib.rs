@@ -131,10 +131,16 @@ pub fn decode_mesh(bytes: &[u8], format: MeshFormat, path: &Path) -> Result<TriM
 /// Writes a triangle mesh atomically in the format of the extension (OBJ, PLY, STL, GLB).
 ///
 /// # Errors
-/// [`Error::UnknownFormat`] for an unsupported extension (OFF is read-only), [`Error::Io`] if
-/// the file cannot be written.
+/// [`Error::UnknownFormat`] for an unsupported extension (OFF is read-only), [`Error::Geom`] for
+/// a mesh with a non-finite vertex or an out-of-range index (nothing is written: no output file
+/// ever holds NaN), [`Error::Io`] if the file cannot be written.
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
-    match MeshFormat::from_path(path)? {
+    let format = MeshFormat::from_path(path)?;
+    mesh.validate().map_err(|source| Error::Geom {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    match format {
         MeshFormat::Obj => write_atomic(path, |w| obj::write(w, mesh)),
         MeshFormat::Ply => write_atomic(path, |w| ply::write_mesh(w, mesh)),
         MeshFormat::Stl => write_atomic(path, |w| stl::write(w, mesh)),

@@ -347,8 +347,15 @@ fn parse_rows(bytes: &[u8]) -> ParseResult<(Vec<DVec3>, Vec<f64>)> {
 /// bounds) or `.exr` (float32, bounds in the file's attributes), atomically.
 ///
 /// # Errors
-/// [`Error::UnknownFormat`] for other extensions, [`Error::Io`] if writing fails.
+/// [`Error::UnknownFormat`] for other extensions, [`Error::Geom`] for a non-finite value (nothing
+/// is written), [`Error::Io`] if writing fails.
 pub fn write_sdf_grid(path: &Path, grid: &Grid, values: &[f64]) -> Result<()> {
+    if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(Error::Geom {
+            path: path.to_path_buf(),
+            source: rfta_geom::Error::NonFiniteValue { index, value },
+        });
+    }
     let ext = extension(path);
     match ext.as_deref() {
         Some("npy") => {

@@ -93,3 +93,34 @@ fn a_ply_element_without_properties_and_a_huge_count_is_not_a_loop() {
     let _ = decode_mesh(bytes, MeshFormat::Ply, Path::new("x.ply"));
     assert!(t.elapsed() < Duration::from_secs(1));
 }
+
+#[test]
+fn writers_refuse_non_finite_data_and_write_nothing() {
+    use rfta_geom::{Grid, TriMesh, glam::DVec3};
+    let dir = std::env::temp_dir().join(format!("rfta-io-nan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mesh = TriMesh {
+        vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, f64::NAN, 0.0)],
+        faces: vec![[0, 1, 2]],
+    };
+    for ext in ["obj", "ply", "stl", "glb"] {
+        let path = dir.join(format!("nan.{ext}"));
+        let e = rfta_io::write_mesh(&path, &mesh).expect_err("refused");
+        assert!(
+            e.to_string()
+                .contains("vertex 2 has a non-finite coordinate"),
+            "{e}"
+        );
+        assert!(!path.exists());
+    }
+    let grid = Grid::cube(1, 0.0, 1.0).expect("grid");
+    let mut values = vec![1.0; 8];
+    values[3] = f64::INFINITY;
+    for ext in ["npy", "exr"] {
+        let path = dir.join(format!("inf.{ext}"));
+        let e = rfta_io::write_sdf_grid(&path, &grid, &values).expect_err("refused");
+        assert!(e.to_string().contains("sample 3 is not finite"), "{e}");
+        assert!(!path.exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

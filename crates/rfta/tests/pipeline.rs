@@ -1,5 +1,6 @@
 //! The pipeline on analytic SDF grids: determinism and the errors of degenerate input.
 
+use rfta::geom::glam::DVec3;
 use rfta::geom::{Grid, SdfSamples};
 use rfta::{Params, reconstruct};
 use rfta_testkit::Analytic;
@@ -12,32 +13,169 @@ fn grid_samples(shape: Analytic, n: usize) -> SdfSamples {
     SdfSamples::grid(grid, values).expect("samples")
 }
 
+/// Samples of `shape` at `n` seeded points, uniform in [-1, 1]^3.
+fn scattered_samples(shape: Analytic, n: usize, seed: u64) -> SdfSamples {
+    let mut rng = rfta::geom::rng::Rng::new(seed);
+    let positions: Vec<DVec3> = (0..n)
+        .map(|_| DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE)
+        .collect();
+    let values = positions.iter().map(|&p| shape.sdf(p)).collect();
+    SdfSamples::scattered(positions, values).expect("samples")
+}
+
+/// The same mesh, tangency points and report counts at 1, 2 and 4 threads, and again on a second
+/// run, for a grid and for scattered samples.
 #[test]
-fn same_mesh_at_one_and_two_threads() {
-    let sphere = Analytic::Sphere { radius: 0.55 };
-    let samples = grid_samples(sphere, 10);
-    let p = Params {
-        k_max: 2,
+fn same_mesh_at_one_two_and_four_threads_and_across_runs() {
+    let torus = Analytic::Torus {
+        major: 0.55,
+        minor: 0.25,
+    };
+    for (what, samples) in [
+        ("grid", grid_samples(torus, 12)),
+        ("scattered", scattered_samples(torus, 3000, 5)),
+    ] {
+        let run = |threads: usize| {
+            reconstruct(
+                &samples,
+                &Params {
+                    k_max: 2,
+                    threads: Some(threads),
+                    ..Params::default()
+                },
+            )
+            .expect(what)
+        };
+        let first = run(1);
+        assert!(first.mesh.n_faces() > 100, "{what}");
+        for threads in [2, 4, 1, 4] {
+            let again = run(threads);
+            assert_eq!(
+                first.mesh.vertices, again.mesh.vertices,
+                "{what} at {threads}"
+            );
+            assert_eq!(first.mesh.faces, again.mesh.faces, "{what} at {threads}");
+            assert_eq!(
+                first.points.points, again.points.points,
+                "{what} at {threads}"
+            );
+            assert_eq!(
+                first.report.points_per_round, again.report.points_per_round,
+                "{what} at {threads}"
+            );
+        }
+    }
+}
+
+/// The report says what happened to every sphere and what the mesh is like.
+#[test]
+fn the_report_accounts_for_spheres_and_checks_the_mesh() {
+    let sphere = Analytic::Sphere { radius: 0.5 };
+    // Spacing 1/6: grid points such as (0.5, 0, 0) lie on the sphere; those whose rounded
+    // coordinates give exactly 0 get no point.
+    let samples = grid_samples(sphere, 12);
+    let zeros = samples.values().iter().filter(|&&v| v == 0.0).count();
+    assert!(zeros >= 6, "{zeros}");
+    let out = reconstruct(
+        &samples,
+        &Params {
+            k_max: 1,
+            ..Params::default()
+        },
+    )
+    .expect("sphere");
+    let r = &out.report;
+    assert!(r.spheres_without_point >= zeros, "{r:?}");
+    let owners = {
+        let mut o = out.points.owners.clone();
+        o.dedup();
+        o.len()
+    };
+    assert_eq!(r.spheres_without_point, samples.len() - owners);
+    assert!(r.mesh.watertight && r.mesh.boundary_edges == 0 && r.mesh.components == 1);
+    assert_eq!(r.inconsistent_samples, 0);
+    assert_eq!(r.clamp, None);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("without a tangency point"))
+    );
+    assert!(out.mesh.vertices.iter().all(|v| v.is_finite()));
+}
+
+/// Values that are not distances: refused, detected or warned about, as documented.
+#[test]
+fn the_check_refuses_non_distances_and_detects_clamping() {
+    let sphere = Analytic::Sphere { radius: 0.5 };
+    let grid = Grid::cube(12, -1.0, 1.0).expect("grid");
+    let exact: Vec<f64> = (0..grid.len())
+        .map(|i| sphere.sdf(grid.position(i)))
+        .collect();
+    let fast = Params {
+        k_max: 1,
         ..Params::default()
     };
-    let one = reconstruct(
-        &samples,
+    let with = |values: Vec<f64>| SdfSamples::grid(grid, values).expect("samples");
+
+    // Twice the distance: every sample overlaps its neighbour across the surface.
+    let doubled = with(exact.iter().map(|v| 2.0 * v).collect());
+    let e = reconstruct(&doubled, &fast).expect_err("refused");
+    assert!(matches!(e, rfta::Error::NotADistance(_)), "{e}");
+    let found = rfta::check::inspect(&doubled);
+    assert!(found.severe_fraction() > 0.9, "{found:?}");
+    // ... unless the check is off.
+    let forced = reconstruct(
+        &doubled,
         &Params {
-            threads: Some(1),
-            ..p.clone()
+            check: false,
+            ..fast.clone()
+        },
+    );
+    if let Ok(out) = forced {
+        assert!(out.mesh.vertices.iter().all(|v| v.is_finite()));
+    }
+
+    // Clamped at two spacings: detected, used, said.
+    let band = 2.0 / 6.0;
+    let clamped = with(exact.iter().map(|v| v.clamp(-band, band)).collect());
+    let out = reconstruct(&clamped, &fast).expect("clamped");
+    assert_eq!(out.report.clamp, Some(band));
+    assert!(out.report.warnings.iter().any(|w| w.contains("clamped")));
+    let worst = out
+        .mesh
+        .vertices
+        .iter()
+        .map(|v| (v.length() - 0.5).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1.0 / 12.0, "clamped: worst vertex {worst}");
+    // The exact SDF has no plateau: no clamp detected (its 8 corners tie at the maximum).
+    assert_eq!(rfta::check::inspect(&with(exact.clone())).clamp, None);
+
+    // A sentinel value far beyond the samples' extent, then the same with a clamp.
+    let mut huge = exact.clone();
+    huge[0] = 1e30;
+    let e = reconstruct(&with(huge.clone()), &fast).expect_err("refused");
+    assert!(e.to_string().contains("exceeds the diagonal"), "{e}");
+    let out = reconstruct(
+        &with(huge),
+        &Params {
+            clamp: Some(1.0),
+            ..fast.clone()
         },
     )
-    .expect("1");
-    let two = reconstruct(
-        &samples,
+    .expect("clamped sentinel");
+    assert!(out.report.mesh.watertight);
+
+    // Memory: refused up front when the estimate exceeds the limit.
+    let e = reconstruct(
+        &with(exact),
         &Params {
-            threads: Some(2),
-            ..p
+            memory_limit: Some(1 << 20),
+            ..fast
         },
     )
-    .expect("2");
-    assert_eq!(one.mesh.vertices, two.mesh.vertices);
-    assert_eq!(one.mesh.faces, two.mesh.faces);
+    .expect_err("too large");
+    assert!(matches!(e, rfta::Error::TooLarge { .. }), "{e}");
 }
 
 #[test]
