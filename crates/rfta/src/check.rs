@@ -114,7 +114,7 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
 }
 
 /// Plateau samples at the extreme magnitude of each sign (grids: all six neighbours equal;
-/// scattered samples: exact ties), enough of them (8, and 0.1% of a grid or 5% of scattered
+/// scattered samples: exact ties at distinct positions), enough of them (8, and 0.1% of a grid or 5% of scattered
 /// samples) to rule out the symmetric ties of a true SDF.
 fn detect_clamp(samples: &SdfSamples) -> Option<(f64, usize)> {
     let values = samples.values();
@@ -155,10 +155,20 @@ fn detect_clamp(samples: &SdfSamples) -> Option<(f64, usize)> {
                 let count = (0..n).into_par_iter().filter(|&i| flat(i)).count();
                 (count, 8.max(n / 1000))
             }
-            None => (
-                values.iter().filter(|&&v| v == extreme).count(),
-                8.max(n / 20),
-            ),
+            None => {
+                // Distinct positions only: exact duplicates of one sample are not a plateau.
+                let mut at: Vec<[u64; 3]> = (0..n)
+                    .filter(|&i| values[i] == extreme)
+                    .map(|i| {
+                        (samples.position(i) + DVec3::ZERO)
+                            .to_array()
+                            .map(f64::to_bits)
+                    })
+                    .collect();
+                at.sort_unstable();
+                at.dedup();
+                (at.len(), 8.max(n / 20))
+            }
         };
         if count >= needed {
             let c = extreme.abs();

@@ -197,3 +197,75 @@ fn a_single_negative_sample_gives_a_finite_mesh_or_an_error_never_a_panic() {
         Err(e) => assert!(!e.to_string().is_empty()),
     }
 }
+
+/// Degenerate layouts and random small inputs, with the check on and off: a finite mesh or an
+/// error, never a panic.
+#[test]
+fn degenerate_and_random_small_inputs_never_panic() {
+    let sphere = Analytic::Sphere { radius: 0.5 };
+    let mut cases: Vec<(String, SdfSamples)> = Vec::new();
+    // A flat grid (one sample thick) and a line of samples.
+    for dims in [[1usize, 9, 9], [9, 1, 1], [2, 2, 9]] {
+        let grid = Grid::from_bounds(dims, DVec3::splat(-1.0), DVec3::splat(1.0)).expect("grid");
+        let values: Vec<f64> = (0..grid.len())
+            .map(|i| sphere.sdf(grid.position(i)))
+            .collect();
+        if let Ok(s) = SdfSamples::grid(grid, values) {
+            cases.push((format!("grid {dims:?}"), s));
+        }
+    }
+    // Many exact duplicates of two samples.
+    let mut p = vec![DVec3::ZERO; 50];
+    p.extend(vec![DVec3::X; 50]);
+    let mut v = vec![-0.4; 50];
+    v.extend(vec![0.5; 50]);
+    cases.push((
+        "duplicates".into(),
+        SdfSamples::scattered(p, v).expect("duplicates are accepted"),
+    ));
+    // Random small clouds: sphere values, random values, tiny and huge coordinates.
+    let mut rng = rfta::geom::rng::Rng::new(99);
+    for k in 0..12 {
+        let n = 2 + rng.below(60) as usize;
+        let scale = [1.0, 1e-6, 1e6][k % 3];
+        let positions: Vec<DVec3> = (0..n)
+            .map(|_| {
+                (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE)
+                    * scale
+            })
+            .collect();
+        let values: Vec<f64> = positions
+            .iter()
+            .map(|&q| {
+                if k % 2 == 0 {
+                    sphere.sdf(q / scale) * scale
+                } else {
+                    (rng.next_f64() - 0.5) * scale
+                }
+            })
+            .collect();
+        if let Ok(s) = SdfSamples::scattered(positions, values) {
+            cases.push((format!("random {k} (n = {n}, scale {scale})"), s));
+        }
+    }
+    assert!(cases.len() >= 10);
+    for (what, samples) in &cases {
+        for check in [true, false] {
+            let params = Params {
+                k_max: 1,
+                check,
+                ..Params::default()
+            };
+            match reconstruct(samples, &params) {
+                Ok(out) => {
+                    assert!(
+                        out.mesh.vertices.iter().all(|v| v.is_finite()),
+                        "{what}: NaN vertex"
+                    );
+                    assert!(out.points.points.iter().all(|v| v.is_finite()), "{what}");
+                }
+                Err(e) => assert!(!e.to_string().is_empty(), "{what}"),
+            }
+        }
+    }
+}
