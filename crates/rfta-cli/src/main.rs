@@ -146,10 +146,9 @@ fn mc(
     }
     rfta_io::write_mesh(output, &mesh)?;
     ui.say(format!(
-        "wrote {} ({} vertices, {} faces)",
+        "wrote {} ({})",
         output.display(),
-        mesh.n_vertices(),
-        mesh.n_faces()
+        ui::mesh_summary(&mesh)
     ));
     Ok(())
 }

@@ -99,10 +99,9 @@ pub(crate) fn run(args: Args, ui: &crate::ui::Ui) -> anyhow::Result<()> {
     ));
     rfta_io::write_mesh(&args.output, &out.mesh)?;
     ui.say(format!(
-        "wrote {} ({} vertices, {} faces)",
+        "wrote {} ({})",
         args.output.display(),
-        out.mesh.n_vertices(),
-        out.mesh.n_faces()
+        crate::ui::mesh_summary(&out.mesh)
     ));
     Ok(())
 }

@@ -66,3 +66,24 @@ pub(crate) fn parse_bounds(s: &str) -> Result<GridBounds, String> {
     }
     Ok(GridBounds { min, max })
 }
+
+/// "N vertices, M faces, watertight" (or what keeps it from being): the check every written mesh
+/// gets before the tool reports it.
+pub(crate) fn mesh_summary(mesh: &rfta_geom::TriMesh) -> String {
+    let t = rfta_mesh::Topology::of(mesh);
+    let shape = if mesh.is_empty() {
+        "empty".to_string()
+    } else if t.is_watertight() && t.degenerate_faces == 0 {
+        "watertight".to_string()
+    } else {
+        format!(
+            "NOT watertight: {} boundary, {} non-manifold edges, {} degenerate faces",
+            t.boundary_edges, t.nonmanifold_edges, t.degenerate_faces
+        )
+    };
+    format!(
+        "{} vertices, {} faces, {shape}",
+        mesh.n_vertices(),
+        mesh.n_faces()
+    )
+}
