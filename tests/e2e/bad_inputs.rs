@@ -181,3 +181,32 @@ fn memory_estimate_brackets_the_measured_peaks() {
     }
     assert!(mib(513usize.pow(3)) > 100.0 * 1024.0);
 }
+
+/// The check must not cry wolf: the exact SDFs of the shared inputs (meshes from Thingi10K and
+/// the graphics canon, sampled by libigl at N = 10 to 50) have no overlapping samples and no
+/// plateau.
+#[test]
+fn real_signed_distances_pass_the_check() {
+    let Some(data) = rfta_testkit::data_dir_or_skip("real_signed_distances_pass_the_check") else {
+        return;
+    };
+    let mut checked = 0;
+    for name in rfta_testkit::input_names(&data) {
+        for n in [10, 20, 30, 50] {
+            let path = data.join(format!("inputs/{name}/sdf_n{n}.npy"));
+            if !path.is_file() {
+                continue;
+            }
+            let samples = rfta_io::read_sdf(&path, None)
+                .expect("readable")
+                .validate(&path)
+                .expect("valid");
+            let c = rfta::check::inspect(&samples);
+            assert_eq!(c.inconsistent, 0, "{}: {c:?}", path.display());
+            assert_eq!(c.clamp, None, "{}", path.display());
+            assert!(c.beyond_extent.is_empty(), "{}", path.display());
+            checked += 1;
+        }
+    }
+    assert!(checked >= 24, "only {checked} grids");
+}

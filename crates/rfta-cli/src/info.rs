@@ -128,7 +128,34 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
         s.negative, s.zero, s.positive, s.non_finite
     );
     match raw.validate(path) {
-        Ok(_) => println!("  valid       yes"),
+        Ok(samples) => {
+            println!("  valid       yes");
+            // What `rfta reconstruct` will make of the values (docs/hardening.md).
+            let c = rfta::check::inspect(&samples);
+            let worst = c.worst.map_or(String::new(), |(i, j, r)| {
+                format!(", worst ratio {r:.3} (samples {i} and {j})")
+            });
+            println!(
+                "  distance    {} of {} samples overlap the nearest sample of the other sign ({:.1}%), {} by more than {}x{worst}{}",
+                c.inconsistent,
+                c.checked,
+                100.0 * c.inconsistent_fraction(),
+                c.severe,
+                rfta::check::SEVERE_RATIO,
+                if c.beyond_extent.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        "; {} values exceed the samples' extent",
+                        c.beyond_extent.len()
+                    )
+                }
+            );
+            match c.clamp {
+                Some((v, n)) => println!("  clamped     at {v} ({n} plateau samples)"),
+                None => println!("  clamped     no"),
+            }
+        }
         Err(e) => println!("  valid       no: {e}"),
     }
     Ok(())
