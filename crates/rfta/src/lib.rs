@@ -11,6 +11,12 @@
 //! The defaults are the paper's ([`Params::default`]); [`Params::paper_table`] is the setting of
 //! its Table 2. Results are deterministic for a given seed, whatever the thread count.
 //!
+//! Before any of that, the values are checked ([`check`]): fields that are not a distance
+//! (occupancy, random, rescaled, sentinel values) are refused with [`Error::NotADistance`], a
+//! clamped SDF is detected and treated as such, and [`Params::memory_limit`] refuses inputs too
+//! large for the machine by [`estimate_peak_memory`]. The mesh is checked before it is returned
+//! ([`MeshCheck`]), and the [`Report`] lists what the caller should know in `warnings`.
+//!
 //! # Example
 //! ```
 //! use rfta::{Params, reconstruct};
@@ -130,9 +136,9 @@ pub struct Params {
     /// clamp unless [`Params::check`] detects one.
     pub clamp: Option<f64>,
     /// Inspect the samples first ([`check::inspect`]): refuse values that are not a distance
-    /// (more than [`Params::max_inconsistent`] of the samples overlap a sample of the other sign by
-    /// more than [`check::SEVERE_RATIO`], or a value exceeds the samples' extent), warn about milder violations, and detect clamping
-    /// when `clamp` is `None`. Default `true`.
+    /// (more than [`Params::max_inconsistent`] of the samples overlap a sample of the other sign
+    /// by more than [`check::SEVERE_RATIO`], or a value exceeds the samples' extent), warn about
+    /// milder violations, and detect clamping when `clamp` is `None`. Default `true`.
     pub check: bool,
     /// The fraction of severely inconsistent samples above which [`Params::check`] refuses (0.25).
     pub max_inconsistent: f64,
@@ -314,8 +320,10 @@ pub struct Reconstruction {
 /// Reconstruct a mesh from signed distance samples (negative inside).
 ///
 /// # Errors
-/// [`Error::InvalidParams`], [`Error::TooFewPoints`] when fewer than 3 spheres admit a tangency
-/// point, [`Error::Raster`], [`Error::Spsr`] when the final solve fails, [`Error::ThreadPool`].
+/// [`Error::InvalidParams`], [`Error::TooLarge`] above [`Params::memory_limit`],
+/// [`Error::NotADistance`] when [`Params::check`] finds the values are not a distance,
+/// [`Error::TooFewPoints`] when fewer than 3 spheres admit a tangency point, [`Error::Raster`],
+/// [`Error::Spsr`] when the final solve fails, [`Error::ThreadPool`], [`Error::NonFiniteOutput`].
 pub fn reconstruct(samples: &SdfSamples, params: &Params) -> Result<Reconstruction> {
     reconstruct_with_progress(samples, params, &mut |_| {})
 }
