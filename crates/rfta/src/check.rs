@@ -114,8 +114,8 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
 }
 
 /// Plateau samples at the extreme magnitude of each sign (grids: all six neighbours equal;
-/// scattered samples: exact ties at distinct positions), enough of them (8, and 0.1% of a grid or 5% of scattered
-/// samples) to rule out the symmetric ties of a true SDF.
+/// scattered samples: exact ties at distinct positions), enough of them (8, and 0.1% of a grid
+/// or 5% of scattered samples) to rule out the symmetric ties of a true SDF.
 fn detect_clamp(samples: &SdfSamples) -> Option<(f64, usize)> {
     let values = samples.values();
     let n = values.len();
