@@ -282,8 +282,8 @@ pub struct Report {
     pub clamp: Option<f64>,
     /// What the output mesh is like (checked before it is returned).
     pub mesh: MeshCheck,
-    /// Things the caller should know: inconsistent samples, a detected clamp, spheres without a
-    /// point, a mesh that is not watertight.
+    /// Things the caller should know: inconsistent samples, a detected clamp, more than 5% of the
+    /// spheres without a point, a mesh that is not watertight.
     pub warnings: Vec<String>,
     /// Wall time of each stage, in order.
     pub timings: Vec<(String, Duration)>,
@@ -560,7 +560,9 @@ fn run(
         report.islands_removed = removed;
     }
     report.mesh = check_mesh(&mut mesh)?;
-    if report.spheres_without_point > 0 {
+    // A few spheres covered by their neighbours are normal (the reference has them too); a
+    // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
+    if report.spheres_without_point * 20 > n {
         report.warnings.push(format!(
             "{} of {n} spheres ended without a tangency point (clamped, zero-valued, or covered by other spheres)",
             report.spheres_without_point

@@ -95,11 +95,9 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
     assert!(r.mesh.watertight && r.mesh.boundary_edges == 0 && r.mesh.components == 1);
     assert_eq!(r.inconsistent_samples, 0);
     assert_eq!(r.clamp, None);
-    assert!(
-        r.warnings
-            .iter()
-            .any(|w| w.contains("without a tangency point"))
-    );
+    // Under 5% of the spheres: counted, not a warning.
+    assert!(r.spheres_without_point * 20 < samples.len());
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     assert!(out.mesh.vertices.iter().all(|v| v.is_finite()));
 }
 
