@@ -99,31 +99,43 @@ pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
 }
 
 /// The number of samples in an SDF file, read from its header without loading the data, for
-/// formats that have one (`.npy`); `None` for others. Lets a caller refuse an input too large for
-/// the machine before reading it.
+/// the grid formats (`.npy`, `.exr`); `None` for others. Lets a caller refuse an input too large
+/// for the machine before reading it.
 ///
 /// # Errors
 /// [`Error::Io`] if the file cannot be read, [`Error::Parse`] for a malformed header.
 pub fn peek_sdf_len(path: &Path) -> Result<Option<usize>> {
     use std::io::Read;
-    if SdfFormat::from_path(path)? != SdfFormat::Npy {
-        return Ok(None);
-    }
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    let mut head = Vec::new();
-    std::fs::File::open(path)
-        .map_err(io)?
-        .take(1 << 20)
-        .read_to_end(&mut head)
-        .map_err(io)?;
-    let header = npy::parse_header(&head).map_err(|e| e.at(path))?;
-    Ok(Some(match header.shape.as_slice() {
-        &[n, 4] => n,
-        _ => header.len,
-    }))
+    match SdfFormat::from_path(path)? {
+        SdfFormat::Npy => {
+            let mut head = Vec::new();
+            std::fs::File::open(path)
+                .map_err(io)?
+                .take(1 << 20)
+                .read_to_end(&mut head)
+                .map_err(io)?;
+            let header = npy::parse_header(&head).map_err(|e| e.at(path))?;
+            Ok(Some(match header.shape.as_slice() {
+                &[n, 4] => n,
+                _ => header.len,
+            }))
+        }
+        SdfFormat::Exr => {
+            let file = std::io::BufReader::new(std::fs::File::open(path).map_err(io)?);
+            let meta =
+                exr::meta::MetaData::read_from_buffered(file, false).map_err(|e| Error::Parse {
+                    path: path.to_path_buf(),
+                    line: None,
+                    detail: format!("invalid OpenEXR header: {e}"),
+                })?;
+            Ok(meta.headers.first().map(|h| h.layer_size.area()))
+        }
+        SdfFormat::Ply | SdfFormat::Text => Ok(None),
+    }
 }
 
 /// Formats of SDF sample files, by extension.
