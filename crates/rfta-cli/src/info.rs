@@ -1,5 +1,6 @@
 //! `rfta info`: describe a mesh, SDF samples or oriented points.
 
+use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Result, bail};
@@ -9,6 +10,13 @@ use rfta_mesh::Topology;
 
 use crate::sample::fmt_vec;
 use crate::ui::Ui;
+
+/// `println!` that returns an error instead of panicking when stdout is closed (`rfta info | head`).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    };
+}
 
 pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<()> {
     let ext = path
@@ -38,10 +46,10 @@ pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<(
                 (Err(_), Ok(m)) => return describe_mesh(path, &m),
                 (Err(e), Err(_)) => return Err(e.into()),
             };
-            println!("{}: oriented points", path.display());
-            println!("  points      {}", pts.len());
+            out!("{}: oriented points", path.display());
+            out!("  points      {}", pts.len());
             let b = pts.bounds();
-            println!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
+            out!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
             Ok(())
         }
         _ => bail!(
@@ -55,57 +63,57 @@ fn describe_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
     let t = Topology::of(mesh);
     let b = mesh.bounds();
     let yes = |x: bool| if x { "yes" } else { "no" };
-    println!("{}: triangle mesh", path.display());
-    println!(
+    out!("{}: triangle mesh", path.display());
+    out!(
         "  vertices    {} ({} used)",
         mesh.n_vertices(),
         t.n_vertices
     );
-    println!("  faces       {}", mesh.n_faces());
-    println!("  edges       {}", t.n_edges);
-    println!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
-    println!("  area        {:.6}", mesh.area());
-    println!("  volume      {:.6}", mesh.signed_volume());
-    println!(
+    out!("  faces       {}", mesh.n_faces());
+    out!("  edges       {}", t.n_edges);
+    out!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
+    out!("  area        {:.6}", mesh.area());
+    out!("  volume      {:.6}", mesh.signed_volume());
+    out!(
         "  watertight  {} ({} boundary edges, {} non-manifold edges)",
         yes(t.is_watertight()),
         t.boundary_edges,
         t.nonmanifold_edges
     );
-    println!(
+    out!(
         "  manifold    {} ({} non-manifold vertices)",
         yes(t.is_manifold()),
         t.nonmanifold_vertices
     );
-    println!(
+    out!(
         "  oriented    {} ({} misoriented edges)",
         yes(t.is_consistently_oriented()),
         t.misoriented_edges
     );
-    println!("  components  {}", t.components);
-    println!("  euler       {}", t.euler_characteristic());
+    out!("  components  {}", t.components);
+    out!("  euler       {}", t.euler_characteristic());
     match t.genus() {
-        Some(g) => println!("  genus       {g}"),
-        None => println!("  genus       undefined (not a closed manifold)"),
+        Some(g) => out!("  genus       {g}"),
+        None => out!("  genus       undefined (not a closed manifold)"),
     }
     if t.degenerate_faces > 0 {
-        println!("  degenerate  {} faces repeat a vertex", t.degenerate_faces);
+        out!("  degenerate  {} faces repeat a vertex", t.degenerate_faces);
     }
     Ok(())
 }
 
 fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
-    println!("{}: SDF samples ({})", path.display(), raw.description);
-    println!("  samples     {}", raw.values.len());
+    out!("{}: SDF samples ({})", path.display(), raw.description);
+    out!("  samples     {}", raw.values.len());
     match &raw.layout {
         Layout::Grid(g) => {
             let b = g.bounds();
-            println!(
+            out!(
                 "  grid        {:?} points, spacing {}",
                 g.dims(),
                 fmt_vec(g.spacing())
             );
-            println!(
+            out!(
                 "  bounds      {} .. {} (from {})",
                 fmt_vec(b.min),
                 fmt_vec(b.max),
@@ -114,28 +122,31 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
         }
         Layout::Scattered(p) => {
             let b = rfta_geom::Aabb::from_points(p);
-            println!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
+            out!("  bounds      {} .. {}", fmt_vec(b.min), fmt_vec(b.max));
         }
     }
     let finite = raw.values.iter().copied().filter(|v| v.is_finite());
     let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
     });
-    println!("  values      {lo:.6} .. {hi:.6}");
+    out!("  values      {lo:.6} .. {hi:.6}");
     let s = SignBalance::of(&raw.values);
-    println!(
+    out!(
         "  signs       {} inside (< 0), {} zero, {} outside (> 0), {} not finite",
-        s.negative, s.zero, s.positive, s.non_finite
+        s.negative,
+        s.zero,
+        s.positive,
+        s.non_finite
     );
     match raw.validate(path) {
         Ok(samples) => {
-            println!("  valid       yes");
+            out!("  valid       yes");
             // What `rfta reconstruct` will make of the values (docs/hardening.md).
             let c = rfta::check::inspect(&samples);
             let worst = c.worst.map_or(String::new(), |(i, j, r)| {
                 format!(", worst ratio {r:.3} (samples {i} and {j})")
             });
-            println!(
+            out!(
                 "  distance    {} of {} samples overlap the nearest sample of the other sign ({:.1}%), {} by more than {}x{worst}{}",
                 c.inconsistent,
                 c.checked,
@@ -152,11 +163,11 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
                 }
             );
             match c.clamp {
-                Some((v, n)) => println!("  clamped     at {v} ({n} plateau samples)"),
-                None => println!("  clamped     no"),
+                Some((v, n)) => out!("  clamped     at {v} ({n} plateau samples)"),
+                None => out!("  clamped     no"),
             }
         }
-        Err(e) => println!("  valid       no: {e}"),
+        Err(e) => out!("  valid       no: {e}"),
     }
     Ok(())
 }

@@ -2,13 +2,9 @@
 //!
 //! Exit status: 0 on success, 1 when the work failed (the message says which file and why),
 //! 2 for invalid command-line usage, 3 when `reconstruct`'s input describes no surface (every
-//! value of one sign): an empty mesh is written and the reason printed.
-
-#![expect(
-    clippy::print_stdout,
-    clippy::print_stderr,
-    reason = "a command-line tool reports on its terminal"
-)]
+//! value of one sign): an empty mesh is written and the reason printed. Output goes through
+//! `writeln!` (`ui::note`, `info`'s `out!`), so a closed pipe ends the tool quietly instead of
+//! panicking.
 
 mod info;
 mod psr;
@@ -80,7 +76,7 @@ fn main() -> ExitCode {
             .num_threads(n.max(1))
             .build_global()
     {
-        eprintln!("error: cannot start {n} threads: {e}");
+        ui::note(&format!("error: cannot start {n} threads: {e}"));
         return ExitCode::from(1);
     }
     let result = match cli.command {
@@ -99,8 +95,17 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.is::<reconstruct::NoSurface>() => {
-            eprintln!("no surface: {e}");
+            ui::note(&format!("no surface: {e}"));
             ExitCode::from(3)
+        }
+        // The reader of our output went away (`rfta info x | head`): nothing left to say.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            ExitCode::SUCCESS
         }
         Err(e) => {
             // One line: the context chain joined, outermost first, without repeating a cause
@@ -112,7 +117,7 @@ fn main() -> ExitCode {
                     msg += &cause;
                 }
             }
-            eprintln!("error: {msg}");
+            ui::note(&format!("error: {msg}"));
             ExitCode::from(1)
         }
     }

@@ -20,14 +20,14 @@ impl Ui {
     /// A summary line (suppressed by `-q`).
     pub(crate) fn say(&self, msg: impl AsRef<str>) {
         if !self.quiet {
-            eprintln!("{}", msg.as_ref());
+            note(msg.as_ref());
         }
     }
 
     /// A detail line (only with `-v`).
     pub(crate) fn detail(&self, msg: impl AsRef<str>) {
         if self.verbose {
-            eprintln!("{}", msg.as_ref());
+            note(msg.as_ref());
         }
     }
 
@@ -86,4 +86,10 @@ pub(crate) fn mesh_summary(mesh: &rfta_geom::TriMesh) -> String {
         mesh.n_vertices(),
         mesh.n_faces()
     )
+}
+
+/// A line on stderr; a closed stderr (`rfta ... 2>&1 | head -1`) is not worth a panic.
+pub(crate) fn note(msg: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{msg}");
 }
