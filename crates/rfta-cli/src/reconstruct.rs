@@ -233,7 +233,30 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     ));
 }
 
+/// Refuses an output path that could not be written, before the work rather than after it.
+pub(crate) fn check_output(path: &Path) -> Result<()> {
+    if rfta_io::MeshFormat::from_path(path)? == rfta_io::MeshFormat::Off {
+        bail!(
+            "{}: OFF is read-only; write .obj, .ply, .stl or .glb",
+            path.display()
+        );
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "{}: the directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
+    check_output(&args.output)?;
     let mut params = args.tuning.params();
     params.clamp = args.clamp;
     params.check = !args.no_check;
@@ -311,6 +334,7 @@ pub(crate) struct DemoArgs {
 }
 
 pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
+    check_output(&args.output)?;
     if args.res < 2 {
         bail!("--res must be at least 2");
     }

@@ -85,9 +85,9 @@ fn unreadable_and_malformed_files_are_errors_naming_file_and_problem() {
         ("header_only.npy", "(truncated file)"),
         ("garbage.npy", "not a .npy file"),
         ("empty.npy", "not a .npy file"),
-        ("garbage.exr", "invalid OpenEXR file"),
-        ("empty.exr", "invalid OpenEXR file"),
-        ("truncated.exr", "invalid OpenEXR file"),
+        ("garbage.exr", "invalid OpenEXR"),
+        ("empty.exr", "invalid OpenEXR"),
+        ("truncated.exr", "invalid OpenEXR"),
         ("garbage.ply", "not a PLY file"),
         ("empty.ply", "not a PLY file"),
         ("truncated.ply", "line 11: missing value for z"),
@@ -153,6 +153,25 @@ fn unreadable_and_malformed_files_are_errors_naming_file_and_problem() {
             err.starts_with("error: ") && err.contains(name),
             "{name}: {err}"
         );
+    }
+}
+
+#[test]
+fn an_unwritable_output_is_refused_before_the_work() {
+    for (out, expected) in [
+        (
+            "/nonexistent-dir/mesh.obj",
+            "the directory /nonexistent-dir does not exist",
+        ),
+        ("mesh.off", "OFF is read-only"),
+        ("mesh.xyz", "unsupported file type"),
+    ] {
+        let o = rfta(&["reconstruct", s(&corpus("sphere.npy")), "-o", out]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{out}: {err}");
+        assert!(err.contains(expected), "{out}: {err}");
+        // Refused at once: no progress, no reconstruction summary.
+        assert_eq!(err.lines().count(), 1, "{out}: {err}");
     }
 }
 
