@@ -29,7 +29,29 @@ pub(crate) struct ExrVolume {
     pub(crate) values: Vec<f64>,
 }
 
+/// The most pixel data a file of `len` bytes may declare: DEFLATE, the strongest of OpenEXR's
+/// lossless codecs, expands at most 1032 to 1 (RLE 64 to 1, PIZ's Huffman stage 16 to 1).
+fn max_declared_bytes(len: usize) -> u64 {
+    (len as u64).saturating_mul(1100).saturating_add(64 << 20)
+}
+
 pub(crate) fn parse(bytes: &[u8]) -> ParseResult<ExrVolume> {
+    // The exr crate allocates every declared layer before reading a byte of pixel data: a
+    // 200-byte header declaring a 40 GB image must be refused from the header.
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
+        .map_err(|e| ParseError::new(format!("invalid OpenEXR file: {e}")))?;
+    let declared = meta.headers.iter().fold(0u64, |acc, h| {
+        let layer = (h.layer_size.width() as u64)
+            .saturating_mul(h.layer_size.height() as u64)
+            .saturating_mul(h.channels.bytes_per_pixel as u64);
+        acc.saturating_add(layer)
+    });
+    if declared > max_declared_bytes(bytes.len()) {
+        return Err(ParseError::new(format!(
+            "the OpenEXR header declares {declared} bytes of pixels, more than a {}-byte file can hold (truncated or corrupt)",
+            bytes.len()
+        )));
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

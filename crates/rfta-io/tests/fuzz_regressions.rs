@@ -124,3 +124,17 @@ fn writers_refuse_non_finite_data_and_write_nothing() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_exr_header_declaring_a_huge_image_is_refused_before_allocating() {
+    // What the EXR fuzzer found: a 706-byte file whose header declares about 40 GB of pixels; the
+    // exr crate allocates every layer before reading pixel data.
+    let file = repo().join("fuzz/regressions/exr/crash-f40f6df8e7e66a342ea936e6ea874add35166249");
+    let bytes = std::fs::read(&file).expect("regression file");
+    let e = decode_sdf(&bytes, SdfFormat::Exr, Path::new("x.exr"), None).expect_err("refused");
+    assert!(
+        e.to_string()
+            .contains("bytes of pixels, more than a 706-byte file can hold"),
+        "{e}"
+    );
+}
