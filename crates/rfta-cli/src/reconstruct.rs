@@ -99,7 +99,7 @@ fn parse_size(s: &str) -> Result<u64, String> {
 
 /// Memory this process can still use: `MemAvailable` of /proc/meminfo, lowered to the cgroup's
 /// remaining allowance where one is set. `None` where neither can be read.
-fn available_memory() -> Option<u64> {
+pub(crate) fn available_memory() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
     let avail = meminfo.as_deref().and_then(|m| {
         m.lines()

@@ -77,13 +77,16 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     let grid =
         Grid::from_bounds([args.res + 1; 3], bounds.min, bounds.max).context("invalid grid")?;
     let n = grid.len();
-    // Refuse grids that cannot fit in memory before allocating (8 bytes per value, 24 per position).
-    let bytes = n.checked_mul(32).context("grid too large")?;
-    if bytes > 16 << 30 {
+    // Refuse grids that cannot fit in memory before allocating (8 bytes per value, 24 per
+    // position), against the memory available now (16 GiB where it cannot be read).
+    let bytes = n.checked_mul(32).context("grid too large")? as u64;
+    let limit = crate::reconstruct::available_memory().unwrap_or(16 << 30);
+    if bytes > limit {
         bail!(
-            "a {}^3 grid needs about {:.1} GiB; choose a smaller --res",
+            "a {}^3 grid needs about {} but {} is available; choose a smaller --res",
             args.res + 1,
-            bytes as f64 / (1u64 << 30) as f64
+            rfta::format_bytes(bytes),
+            rfta::format_bytes(limit)
         );
     }
     let t0 = Instant::now();

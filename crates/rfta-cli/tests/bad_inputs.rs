@@ -310,4 +310,17 @@ fn an_input_larger_than_memory_is_refused_from_its_header() {
     assert!(err.contains("truncated file"), "{err}");
     let (code, err) = reconstruct("sphere.npy", &out, &["--max-memory", "12X"]);
     assert_eq!(code, 2, "{err}");
+    // Sampling a grid no machine holds is refused before the first allocation.
+    let o = rfta(&[
+        "sample",
+        "--shape",
+        "sphere",
+        "--res",
+        "100000",
+        "-o",
+        s(&dir.join("big.npy")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("choose a smaller --res"), "{err}");
 }
