@@ -177,16 +177,26 @@ impl Tuning {
 fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::Reconstruction> {
     let bar = ui.progress(params.k_max as u64 + 2, "rfta");
     let b = bar.clone();
+    let mut label = String::from("initial");
     let mut progress = move |stage: Stage| match stage {
-        Stage::Initial => b.set_message("initial"),
+        Stage::Initial => {
+            label = "initial".into();
+            b.set_message(label.clone());
+        }
         Stage::FineTune { round, of } => {
-            b.set_message(format!("round {round}/{of}"));
+            label = format!("round {round}/{of}");
+            b.set_message(label.clone());
             b.inc(1);
         }
         Stage::Final => {
-            b.set_message("final");
+            label = "final".into();
+            b.set_message(label.clone());
             b.inc(1);
         }
+        Stage::Progress { done, of } => {
+            b.set_message(format!("{label} {}%", 100 * done / of.max(1)));
+        }
+        _ => {}
     };
     let out = rfta::reconstruct_with_progress(samples, params, &mut progress);
     bar.finish_and_clear();

@@ -32,6 +32,8 @@
 //! assert!((x - spheres[1].center).length() >= 1.0 - 1e-9);
 //! ```
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
@@ -287,6 +289,28 @@ pub fn initial_points(
     tree: &SphereTree,
     params: &Params,
 ) -> TangentPoints {
+    initial_points_counted(
+        spheres,
+        values,
+        set,
+        empty_space,
+        tree,
+        params,
+        &AtomicUsize::new(0),
+    )
+}
+
+/// [`initial_points`], adding 1 to `done` as each sphere of `set` is finished (for progress
+/// reports from another thread; the result does not depend on it).
+pub fn initial_points_counted(
+    spheres: &[Sphere],
+    values: &[f64],
+    set: &[u32],
+    empty_space: &[DVec3],
+    tree: &SphereTree,
+    params: &Params,
+    done: &AtomicUsize,
+) -> TangentPoints {
     if empty_space.is_empty() || set.is_empty() {
         return TangentPoints::default();
     }
@@ -320,6 +344,9 @@ pub fn initial_points(
                 None => Vec::new(),
             }
         })
+        .inspect(|_| {
+            done.fetch_add(1, Ordering::Relaxed);
+        })
         .collect();
     TangentPoints::from_per_sphere(per, set.iter().copied())
 }
@@ -335,6 +362,28 @@ pub fn fine_tune(
     cloud: &TangentPoints,
     tree: &SphereTree,
     params: &Params,
+) -> TangentPoints {
+    fine_tune_counted(
+        spheres,
+        values,
+        mesh,
+        cloud,
+        tree,
+        params,
+        &AtomicUsize::new(0),
+    )
+}
+
+/// [`fine_tune`], adding 1 to `done` as each sphere is finished (for progress reports from
+/// another thread; the result does not depend on it).
+pub fn fine_tune_counted(
+    spheres: &[Sphere],
+    values: &[f64],
+    mesh: &TriMesh,
+    cloud: &TangentPoints,
+    tree: &SphereTree,
+    params: &Params,
+    done: &AtomicUsize,
 ) -> TangentPoints {
     let Ok(index) = MeshIndex::new(mesh) else {
         return cloud.clone();
@@ -433,6 +482,9 @@ pub fn fine_tune(
                 .filter_map(|x| local_search(spheres, tree, i, x, params))
                 .map(|x| (x, normal_at(s.center, v, x)))
                 .collect()
+        })
+        .inspect(|_| {
+            done.fetch_add(1, Ordering::Relaxed);
         })
         .collect();
     TangentPoints::from_per_sphere(per, 0..n as u32)

@@ -35,6 +35,7 @@
 
 pub mod check;
 
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 pub use rfta_feasible as feasible;
@@ -238,6 +239,7 @@ impl Params {
 
 /// A pipeline stage, for progress reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Stage {
     /// Empty-space sampling and initial tangency points.
     Initial,
@@ -250,6 +252,46 @@ pub enum Stage {
     },
     /// The final screened Poisson solve.
     Final,
+    /// Progress within the current stage: `done` of `of` spheres, reported about twice a second
+    /// while a stage runs longer than that.
+    Progress {
+        /// Spheres finished.
+        done: usize,
+        /// Spheres in the stage.
+        of: usize,
+    },
+}
+
+/// Runs `work` with a counter of finished spheres, reporting it through `progress` from a
+/// monitor thread every half second until `work` returns (the result does not depend on it).
+fn counted<T>(
+    of: usize,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    work: impl FnOnce(&AtomicUsize) -> T,
+) -> T {
+    let done = AtomicUsize::new(0);
+    let finished = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let monitor = scope.spawn(|| {
+            let mut last = 0;
+            loop {
+                std::thread::park_timeout(Duration::from_millis(500));
+                if finished.load(Ordering::Acquire) {
+                    break;
+                }
+                let d = done.load(Ordering::Relaxed);
+                if d != last {
+                    progress(Stage::Progress { done: d, of });
+                    last = d;
+                }
+            }
+        });
+        let out = work(&done);
+        finished.store(true, Ordering::Release);
+        monitor.thread().unpark();
+        let _ = monitor.join();
+        out
+    })
 }
 
 /// What a reconstruction did.
@@ -485,14 +527,17 @@ fn run(
         report.empty_space_points += empty.points.len();
         let batch = draw_batch(set, params.batch, hash(params.seed, 10 + k));
         let tree = SphereTree::with_indices(&spheres, &batch);
-        parts.push(rfta_feasible::initial_points(
-            &spheres,
-            &values,
-            set,
-            &empty.points,
-            &tree,
-            &fparams,
-        ));
+        parts.push(counted(set.len(), progress, |done| {
+            rfta_feasible::initial_points_counted(
+                &spheres,
+                &values,
+                set,
+                &empty.points,
+                &tree,
+                &fparams,
+                done,
+            )
+        }));
     }
     let mut cloud = merge_by_owner(parts);
     report.feasible_initial = cloud.len();
@@ -529,7 +574,11 @@ fn run(
                 break;
             }
         };
-        let next = rfta_feasible::fine_tune(&spheres, &values, &mesh, &cloud, &tree, &fparams);
+        let next = counted(n, progress, |done| {
+            rfta_feasible::fine_tune_counted(
+                &spheres, &values, &mesh, &cloud, &tree, &fparams, done,
+            )
+        });
         report
             .timings
             .push((format!("fine-tuning round {round}"), t.elapsed()));
@@ -780,4 +829,39 @@ fn solve(
     let pts = OrientedPoints::new(cloud.points.clone(), cloud.normals.clone(), None)
         .map_err(|e| rfta_spsr::Error::DegenerateInput(format!("tangency points: {e}")))?;
     Ok(rfta_spsr::reconstruct(&pts, spsr)?.mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_stages_report_progress_and_short_ones_stay_quiet() {
+        let mut seen = Vec::new();
+        let out = counted(12, &mut |s| seen.push(s), |done| {
+            for _ in 0..12 {
+                std::thread::sleep(Duration::from_millis(100));
+                done.fetch_add(1, Ordering::Relaxed);
+            }
+            7
+        });
+        assert_eq!(out, 7);
+        assert!(!seen.is_empty(), "a 1.2 s stage reports");
+        let mut last = 0;
+        for s in &seen {
+            let Stage::Progress { done, of } = *s else {
+                panic!("{s:?}");
+            };
+            assert!(of == 12 && done >= last && done <= 12, "{seen:?}");
+            last = done;
+        }
+        let mut quiet = Vec::new();
+        let start = Instant::now();
+        counted(5, &mut |s| quiet.push(s), |done| {
+            done.fetch_add(5, Ordering::Relaxed);
+        });
+        assert!(quiet.is_empty());
+        // The monitor is woken when the work ends, not after its half-second nap.
+        assert!(start.elapsed() < Duration::from_millis(400));
+    }
 }
