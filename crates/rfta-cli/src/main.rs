@@ -130,7 +130,7 @@ fn mc(
     iso: f64,
     ui: &ui::Ui,
 ) -> anyhow::Result<()> {
-    reconstruct::check_output(output)?;
+    ui::check_output(output)?;
     let samples = rfta_io::read_sdf(input, bounds)?.validate(input)?;
     let Some(grid) = samples.as_grid() else {
         anyhow::bail!(

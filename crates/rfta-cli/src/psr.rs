@@ -54,7 +54,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: Args, ui: &crate::ui::Ui) -> anyhow::Result<()> {
-    crate::reconstruct::check_output(&args.output)?;
+    crate::ui::check_output(&args.output)?;
     let mut params = match args.preset {
         Preset::Poissonrecon => SpsrParams::default(),
         Preset::Rfta => SpsrParams::rfta_reference(),

@@ -52,7 +52,7 @@ pub(crate) struct Args {
     no_check: bool,
     /// Refuse inputs whose estimated peak memory exceeds this (e.g. 8G, 512M; default: the
     /// memory available now).
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = crate::ui::parse_size)]
     max_memory: Option<u64>,
     #[command(flatten)]
     tuning: Tuning,
@@ -69,62 +69,6 @@ impl std::fmt::Display for NoSurface {
 }
 
 impl std::error::Error for NoSurface {}
-
-/// Parses a byte size: a number with an optional K, M, G or T suffix (powers of 1024).
-fn parse_size(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let (num, mult) = match t.char_indices().last() {
-        Some((i, c)) if c.is_ascii_alphabetic() => {
-            let m: u64 = match c.to_ascii_uppercase() {
-                'K' => 1 << 10,
-                'M' => 1 << 20,
-                'G' => 1 << 30,
-                'T' => 1 << 40,
-                'B' => 1,
-                _ => return Err(format!("'{s}': unknown unit '{c}' (use K, M, G or T)")),
-            };
-            (&t[..i], m)
-        }
-        _ => (t, 1),
-    };
-    let v: f64 = num
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a size such as 8G or 512M"))?;
-    if !(v.is_finite() && v > 0.0) {
-        return Err(format!("'{s}' must be a positive size"));
-    }
-    Ok((v * mult as f64) as u64)
-}
-
-/// Memory this process can still use: `MemAvailable` of /proc/meminfo, lowered to the cgroup's
-/// remaining allowance where one is set. `None` where neither can be read.
-pub(crate) fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
-    let avail = meminfo.as_deref().and_then(|m| {
-        m.lines()
-            .find(|l| l.starts_with("MemAvailable:"))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|kb| kb.parse::<u64>().ok())
-            .map(|kb| kb * 1024)
-    });
-    let read = |p: &str| {
-        std::fs::read_to_string(p)
-            .ok()
-            .and_then(|t| t.trim().parse::<u64>().ok())
-    };
-    let cgroup = match (
-        read("/sys/fs/cgroup/memory.max"),
-        read("/sys/fs/cgroup/memory.current"),
-    ) {
-        (Some(max), Some(cur)) => Some(max.saturating_sub(cur)),
-        _ => None,
-    };
-    match (avail, cgroup) {
-        (Some(a), Some(c)) => Some(a.min(c)),
-        (a, c) => a.or(c),
-    }
-}
 
 /// Options shared by `reconstruct` and `demo`.
 #[derive(Debug, clap::Args)]
@@ -224,12 +168,6 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     for w in &r.warnings {
         ui.say(format!("warning: {w}"));
     }
-    if r.mesh.degenerate_removed > 0 {
-        ui.detail(format!(
-            "removed {} faces with a repeated vertex",
-            r.mesh.degenerate_removed
-        ));
-    }
     ui.say(format!(
         "{} vertices, {} faces, {} component(s), {} in {seconds:.2} s",
         out.mesh.n_vertices(),
@@ -243,50 +181,25 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     ));
 }
 
-/// Refuses an output path that could not be written, before the work rather than after it.
-pub(crate) fn check_output(path: &Path) -> Result<()> {
-    if rfta_io::MeshFormat::from_path(path)? == rfta_io::MeshFormat::Off {
-        bail!(
-            "{}: OFF is read-only; write .obj, .ply, .stl or .glb",
-            path.display()
-        );
-    }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        bail!(
-            "{}: the directory {} does not exist",
-            path.display(),
-            dir.display()
-        );
-    }
-    Ok(())
-}
-
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
-    check_output(&args.output)?;
+    crate::ui::check_output(&args.output)?;
     let mut params = args.tuning.params();
     params.clamp = args.clamp;
     params.check = !args.no_check;
-    params.memory_limit = args.max_memory.or_else(available_memory);
+    params.memory_limit = args.max_memory.or_else(crate::ui::available_memory);
     // Refuse an oversized grid from its header, before reading the data.
-    if let (Some(limit), Some(n)) = (params.memory_limit, rfta_io::peek_sdf_len(&args.input)?) {
-        let needed = rfta::estimate_peak_memory(n, &params);
-        if needed > limit {
-            bail!(
-                "{}: {n} samples need about {} of memory by rfta's estimate, but {} {}; use a coarser grid, or --max-memory to override",
+    if let Some(n) = rfta_io::peek_sdf_len(&args.input)? {
+        rfta::check_memory(n, &params).with_context(|| {
+            format!(
+                "{}: refused before reading (the limit is {})",
                 args.input.display(),
-                rfta::format_bytes(needed),
-                rfta::format_bytes(limit),
                 if args.max_memory.is_some() {
-                    "is the --max-memory limit"
+                    "--max-memory"
                 } else {
-                    "is available"
+                    "the memory available now"
                 }
-            );
-        }
+            )
+        })?;
     }
     let raw = rfta_io::read_sdf(&args.input, args.bounds)?;
     let samples = match raw.validate(&args.input) {
@@ -313,9 +226,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
 }
 
 fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
-    if mesh.vertices.iter().any(|v| !v.is_finite()) {
-        bail!("internal error: the mesh has non-finite vertices; nothing written");
-    }
+    // `write_mesh` refuses non-finite vertices and writes nothing.
     rfta_io::write_mesh(path, mesh)?;
     ui.say(format!("wrote {}", path.display()));
     Ok(())
@@ -344,7 +255,7 @@ pub(crate) struct DemoArgs {
 }
 
 pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
-    check_output(&args.output)?;
+    crate::ui::check_output(&args.output)?;
     if args.res < 2 {
         bail!("--res must be at least 2");
     }

@@ -299,9 +299,9 @@ fn an_input_larger_than_memory_is_refused_from_its_header() {
     let (code, err) = reconstruct("oversized_513.npy", &out, &["--max-memory", "8G"]);
     assert_eq!(code, 1, "{err}");
     assert!(
-        err.contains("135005697 samples need about")
-            && err.contains("GiB of memory")
-            && err.contains("8.0 GiB is the --max-memory limit"),
+        err.contains("oversized_513.npy: refused before reading (the limit is --max-memory)")
+            && err.contains("135005697 samples need about 129.0 GiB of memory")
+            && err.contains("more than the limit of 8.0 GiB"),
         "{err}"
     );
     // With the limit lifted the data is read, and found missing.

@@ -406,14 +406,20 @@ pub fn write_sdf_grid(path: &Path, grid: &Grid, values: &[f64]) -> Result<()> {
 /// [`Error::Io`], [`Error::Parse`], [`Error::UnknownFormat`], or [`Error::Geom`] for NaN
 /// positions or zero normals.
 pub fn read_oriented_points(path: &Path) -> Result<OrientedPoints> {
-    if !matches!(
-        extension(path).as_deref(),
-        Some("ply" | "xyz" | "pts" | "txt" | "csv")
-    ) {
-        return decode_oriented_points(&[], path);
+    let ply = points_are_ply(path)?;
+    decode_points(&read_bytes(path)?, ply, path)
+}
+
+/// Whether oriented points at `path` are PLY (else text rows), by extension.
+fn points_are_ply(path: &Path) -> Result<bool> {
+    match extension(path).as_deref() {
+        Some("ply") => Ok(true),
+        Some("xyz" | "pts" | "txt" | "csv") => Ok(false),
+        _ => Err(Error::UnknownFormat {
+            path: path.to_path_buf(),
+            expected: "oriented points: .ply, .xyz, .pts, .txt, .csv",
+        }),
     }
-    let bytes = read_bytes(path)?;
-    decode_oriented_points(&bytes, path)
 }
 
 /// Decodes oriented points held in memory, as [`read_oriented_points`]; the extension of `path`
@@ -422,24 +428,19 @@ pub fn read_oriented_points(path: &Path) -> Result<OrientedPoints> {
 /// # Errors
 /// As [`read_oriented_points`].
 pub fn decode_oriented_points(bytes: &[u8], path: &Path) -> Result<OrientedPoints> {
+    decode_points(bytes, points_are_ply(path)?, path)
+}
+
+fn decode_points(bytes: &[u8], ply: bool, path: &Path) -> Result<OrientedPoints> {
     let at = |e: ParseError| e.at(path);
-    let (positions, normals) = match extension(path).as_deref() {
-        Some("ply") => {
-            let p = ply::parse(bytes).map_err(at)?;
-            (p.positions().map_err(at)?, p.normals().map_err(at)?)
-        }
-        Some("xyz" | "pts" | "txt" | "csv") => {
-            let rows = parse_numeric_rows(bytes, 6, "x y z nx ny nz").map_err(at)?;
-            rows.iter()
-                .map(|r| (DVec3::new(r[0], r[1], r[2]), DVec3::new(r[3], r[4], r[5])))
-                .unzip()
-        }
-        _ => {
-            return Err(Error::UnknownFormat {
-                path: path.to_path_buf(),
-                expected: "oriented points: .ply, .xyz, .pts, .txt",
-            });
-        }
+    let (positions, normals) = if ply {
+        let p = ply::parse(bytes).map_err(at)?;
+        (p.positions().map_err(at)?, p.normals().map_err(at)?)
+    } else {
+        let rows = parse_numeric_rows(bytes, 6, "x y z nx ny nz").map_err(at)?;
+        rows.iter()
+            .map(|r| (DVec3::new(r[0], r[1], r[2]), DVec3::new(r[3], r[4], r[5])))
+            .unzip()
     };
     OrientedPoints::new(positions, normals, None).map_err(|source| Error::Geom {
         path: path.to_path_buf(),

@@ -64,7 +64,6 @@ impl Inspection {
 /// Measures how far `samples` are from a signed distance function (see the module docs).
 pub fn inspect(samples: &SdfSamples) -> Inspection {
     let values = samples.values();
-    let positions = samples.positions();
     let bounds = samples.bounds();
     let diag = (bounds.max - bounds.min).length();
     let mut out = Inspection {
@@ -78,13 +77,13 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
     if !neg.is_empty() && !pos.is_empty() {
         let mut ratios: Vec<(usize, usize, f64)> = Vec::with_capacity(neg.len() + pos.len());
         for (from, to) in [(&neg, &pos), (&pos, &neg)] {
-            let pts: Vec<[f64; 3]> = to.iter().map(|&j| positions[j].to_array()).collect();
+            let pts: Vec<[f64; 3]> = to.iter().map(|&j| samples.position(j).to_array()).collect();
             let Ok(kd) = ImmutableKdTree::<f64, 3>::new_from_slice(&pts) else {
                 continue;
             };
             ratios.par_extend(from.par_iter().map(|&i| {
                 let nn = kd
-                    .query(&positions[i].to_array())
+                    .query(&samples.position(i).to_array())
                     .nearest_one::<SquaredEuclidean<f64>>()
                     .execute();
                 let j = to[nn.item as usize];

@@ -334,8 +334,8 @@ pub struct Report {
 /// Checks of the output mesh.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct MeshCheck {
-    /// Faces with a repeated vertex index, removed.
-    pub degenerate_removed: usize,
+    /// Faces with a repeated vertex index (none unless the extraction has a bug).
+    pub degenerate_faces: usize,
     /// Faces of zero area left in the mesh (distinct vertices at one position or on one line).
     pub zero_area_faces: usize,
     /// Every edge has exactly two faces.
@@ -380,16 +380,7 @@ pub fn reconstruct_with_progress(
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<Reconstruction> {
     params.validate()?;
-    if let Some(limit) = params.memory_limit {
-        let needed = estimate_peak_memory(samples.len(), params);
-        if needed > limit {
-            return Err(Error::TooLarge {
-                samples: samples.len(),
-                needed,
-                limit,
-            });
-        }
-    }
+    check_memory(samples.len(), params)?;
     match params.threads {
         None => run(samples, params, progress),
         Some(t) => rayon::ThreadPoolBuilder::new()
@@ -420,6 +411,22 @@ pub fn estimate_peak_memory(n: usize, params: &Params) -> u64 {
     BASE.saturating_add(
         (n as u64).saturating_mul(PER_SAMPLE.saturating_add(extra_points * PER_EXTRA_POINT)),
     )
+}
+
+/// Whether `n` samples fit in [`Params::memory_limit`] by [`estimate_peak_memory`]: callers
+/// that know `n` before loading the samples (from a file header) can refuse early.
+///
+/// # Errors
+/// [`Error::TooLarge`] with the estimate and the limit.
+pub fn check_memory(n: usize, params: &Params) -> Result<()> {
+    match params.memory_limit {
+        Some(limit) if estimate_peak_memory(n, params) > limit => Err(Error::TooLarge {
+            samples: n,
+            needed: estimate_peak_memory(n, params),
+            limit,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Bytes as "1.5 GiB".
@@ -608,7 +615,7 @@ fn run(
         mesh = kept;
         report.islands_removed = removed;
     }
-    report.mesh = check_mesh(&mut mesh)?;
+    report.mesh = check_mesh(&mesh)?;
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
     if report.spheres_without_point * 20 > n {
@@ -625,8 +632,8 @@ fn run(
     }
     if report.mesh.zero_area_faces > 0 {
         report.warnings.push(format!(
-            "the mesh has {} faces of zero area",
-            report.mesh.zero_area_faces
+            "the mesh has {} faces of zero area ({} with a repeated vertex)",
+            report.mesh.zero_area_faces, report.mesh.degenerate_faces
         ));
     }
     let points = TangentPoints {
@@ -697,20 +704,17 @@ fn inspect(samples: &SdfSamples, params: &Params, report: &mut Report) -> Result
     Ok(())
 }
 
-/// Removes faces with a repeated vertex, refuses non-finite vertices and reports topology.
-fn check_mesh(mesh: &mut TriMesh) -> Result<MeshCheck> {
+/// Refuses non-finite vertices and reports degenerate faces and topology.
+fn check_mesh(mesh: &TriMesh) -> Result<MeshCheck> {
     if let Some(i) = mesh.vertices.iter().position(|v| !v.is_finite()) {
         return Err(Error::NonFiniteOutput(i));
     }
-    let before = mesh.faces.len();
-    mesh.faces
-        .retain(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]);
     let zero_area_faces = (0..mesh.faces.len())
         .filter(|&f| mesh.face_normal_scaled(f).length_squared() == 0.0)
         .count();
     let topo = rfta_mesh::Topology::of(mesh);
     Ok(MeshCheck {
-        degenerate_removed: before - mesh.faces.len(),
+        degenerate_faces: topo.degenerate_faces,
         zero_area_faces,
         watertight: topo.is_watertight(),
         boundary_edges: topo.boundary_edges,
