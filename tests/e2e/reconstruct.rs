@@ -93,6 +93,6 @@ fn torus_at_16_cubed_is_genus_one_and_closer_than_marching_cubes() {
     );
     assert_eq!(
         out.report.points_per_round.len(),
-        Params::default().k_max + 1
+        Params::default().rounds + 1
     );
 }

@@ -10,7 +10,8 @@ use rfta_spsr::{Boundary, SpsrParams};
 pub(crate) enum Preset {
     /// PoissonRecon's defaults (depth 8, screening 2, box 1.1).
     Poissonrecon,
-    /// The Reach for the Arcs reference setting (depth 10, screening 10, box 3.2).
+    /// The setting `rfta reconstruct` runs (box 3.2 and degree 1 as the Reach for the Arcs
+    /// reference, screening 30 in this solver's units; depth 10 unless --depth).
     Rfta,
 }
 
@@ -57,7 +58,7 @@ pub(crate) fn run(args: Args, ui: &crate::ui::Ui) -> anyhow::Result<()> {
     crate::ui::check_output(&args.output)?;
     let mut params = match args.preset {
         Preset::Poissonrecon => SpsrParams::default(),
-        Preset::Rfta => SpsrParams::rfta_reference(),
+        Preset::Rfta => rfta::Params::default().spsr_params(None),
     };
     if let Some(d) = args.depth {
         params.depth = d;

@@ -91,6 +91,10 @@ pub(crate) struct Tuning {
     /// Remove closed islands smaller than this fraction of the sample spacing (0 keeps all).
     #[arg(long)]
     min_island: Option<f64>,
+    /// Octree depth of the screened Poisson solves (default: matched to the sample spacing,
+    /// 4 finest cells per spacing; the reference always uses 10).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+    depth: Option<u32>,
 }
 
 impl Tuning {
@@ -101,10 +105,10 @@ impl Tuning {
             Preset::Fast => Params::fast(),
         };
         if let Some(k) = self.iters {
-            p.k_max = k;
+            p.rounds = k;
         }
         if let Some(m) = self.max_points {
-            p.n_max = m;
+            p.max_points_per_sphere = m;
         }
         if let Some(s) = self.seed {
             p.seed = s;
@@ -113,13 +117,16 @@ impl Tuning {
         if let Some(m) = self.min_island {
             p.min_island = m;
         }
+        if self.depth.is_some() {
+            p.spsr_depth = self.depth;
+        }
         p
     }
 }
 
 /// Reconstruct with a progress bar over the stages.
 fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::Reconstruction> {
-    let bar = ui.progress(params.k_max as u64 + 2, "rfta");
+    let bar = ui.progress(params.rounds as u64 + 2, "rfta");
     let b = bar.clone();
     let mut label = String::from("initial");
     let mut progress = move |stage: Stage| match stage {
@@ -150,8 +157,8 @@ fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::
 fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     let r = &out.report;
     ui.detail(format!(
-        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; points per round {:?}; {} spheres without a point",
-        r.samples, r.negative, r.raster_res, r.empty_space_points, r.feasible_initial, r.points_per_round, r.spheres_without_point
+        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; screened Poisson depth {}; points per round {:?}; {} spheres without a point",
+        r.samples, r.negative, r.raster_resolution, r.empty_space_points, r.feasible_initial, r.spsr_depth, r.points_per_round, r.spheres_without_point
     ));
     for (stage, t) in &r.timings {
         ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));

@@ -231,13 +231,16 @@ pub fn local_search(
     let mut cands: Vec<(f64, u32)> = Vec::new();
     let mut list: Vec<Sphere> = Vec::new();
     for it in 0..=params.local_search_iters {
-        if !tree.inside_any(x, -params.tol, Some(i)) {
+        // One query answers both questions: the deepest sphere within `tol` decides feasibility
+        // (inside by more than `tol`), and the `k_search` deepest are the ones to resolve.
+        tree.spheres_containing_into(x, params.k_search.max(1), params.tol, Some(i), &mut buf);
+        if buf.first().is_none_or(|&(d, _)| d >= -params.tol) {
             return Some(x);
         }
         if it == params.local_search_iters {
             break;
         }
-        tree.spheres_containing_into(x, params.k_search, params.tol, Some(i), &mut buf);
+        buf.truncate(params.k_search);
         // Candidates by radius, ascending (ties by index), as the reference sorts them.
         cands.clear();
         cands.extend(buf.iter().map(|&(_, j)| (spheres[j as usize].radius, j)));
@@ -260,21 +263,46 @@ pub fn transport(
     q: DVec3,
     params: &Params,
 ) -> DVec3 {
+    transport_checked(spheres, tree, i, a, q, params, &mut Vec::new()).0
+}
+
+/// [`transport`], also saying whether the result is known to be feasible against `tree` (a
+/// step that passed the test; `false` when `q` is returned after every halving failed, or `a`
+/// untouched). `near` is scratch.
+fn transport_checked(
+    spheres: &[Sphere],
+    tree: &SphereTree,
+    i: u32,
+    a: DVec3,
+    q: DVec3,
+    params: &Params,
+    near: &mut Vec<u32>,
+) -> (DVec3, bool) {
     let s = spheres[i as usize];
     let tol = params.tol;
     if (a - q).length() < tol || s.radius < tol || (a - s.center).length() < tol {
-        return a;
+        return (a, false);
     }
     let chord = ((a - q).length() / (2.0 * s.radius)).min(1.0);
     let mut arc = (params.tau / s.radius).min(2.0 * chord.asin()) * s.radius;
+    // Every step lands within `arc` of `a`'s projection (a chord is shorter than its arc), so the
+    // spheres that can hold a step by more than `tol` are among those within `arc - tol` of it
+    // (padded for rounding): one tree query for all the halvings, then the tree's own test
+    // against that short list.
+    let start = project_onto_sphere(&s, a);
+    let reach = arc * (1.0 + 1e-9) + 1e-12 * (1.0 + start.abs().max_element()) - tol;
+    tree.spheres_within_into(start, reach, Some(i), near);
     for _ in 0..params.halvings {
         let y = transport_on_sphere(&s, a, q, arc);
-        if !tree.inside_any(y, -tol, Some(i)) {
-            return y;
+        if !near
+            .iter()
+            .any(|&j| spheres[j as usize].signed_distance(y) < -tol)
+        {
+            return (y, true);
         }
         arc *= 0.5;
     }
-    q
+    (q, false)
 }
 
 /// Initial tangency points of one sign set (`set`: indices into `spheres` / `values`): for each
@@ -370,12 +398,18 @@ pub fn fine_tune(
         cloud,
         tree,
         params,
+        false,
         &AtomicUsize::new(0),
     )
 }
 
 /// [`fine_tune`], adding 1 to `done` as each sphere is finished (for progress reports from
 /// another thread; the result does not depend on it).
+///
+/// `cloud_feasible` says that every point of `cloud` already passed the feasibility test against
+/// this same `tree` (the previous round's output, when every round's tree holds all spheres):
+/// points kept unchanged are then not tested again. The result is the same either way.
+#[allow(clippy::too_many_arguments)]
 pub fn fine_tune_counted(
     spheres: &[Sphere],
     values: &[f64],
@@ -383,6 +417,7 @@ pub fn fine_tune_counted(
     cloud: &TangentPoints,
     tree: &SphereTree,
     params: &Params,
+    cloud_feasible: bool,
     done: &AtomicUsize,
 ) -> TangentPoints {
     let Ok(index) = MeshIndex::new(mesh) else {
@@ -433,11 +468,13 @@ pub fn fine_tune_counted(
             let qi = proj(cp.point);
             let owned = start[i as usize]..start[i as usize + 1];
             let k = owned.len();
-            let mut emitted: Vec<DVec3> = Vec::new();
+            // Each emitted point, and whether it is already known to be feasible.
+            let mut emitted: Vec<(DVec3, bool)> = Vec::new();
+            let mut near = Vec::new();
             let cut = di < r - tol && r > tol;
             let miss = di > r + tol && r > tol;
             if k == 0 {
-                emitted.push(qi);
+                emitted.push((qi, false));
             } else if cut || miss {
                 let closest = owned
                     .clone()
@@ -448,13 +485,14 @@ pub fn fine_tune_counted(
                             .then(a.cmp(&b))
                     })
                     .unwrap_or(owned.start);
-                emitted.push(transport(
+                emitted.push(transport_checked(
                     spheres,
                     tree,
                     i,
                     cloud.points[closest],
                     qi,
                     params,
+                    &mut near,
                 ));
                 if cut && params.n_max > 1 {
                     let mut by_distance: Vec<usize> = owned.collect();
@@ -468,18 +506,34 @@ pub fn fine_tune_counted(
                     let limit = if severe { k } else { k - 1 };
                     for &a in by_distance.iter().take(limit.min(params.n_max - 1)) {
                         let target = proj(point_closest[a].0);
-                        emitted.push(transport(spheres, tree, i, cloud.points[a], target, params));
+                        emitted.push(transport_checked(
+                            spheres,
+                            tree,
+                            i,
+                            cloud.points[a],
+                            target,
+                            params,
+                            &mut near,
+                        ));
                     }
                 }
             } else {
-                emitted.extend(owned.map(|a| cloud.points[a]));
+                emitted.extend(owned.map(|a| (cloud.points[a], cloud_feasible)));
             }
             if r >= params.clamp || r <= 0.0 {
                 return Vec::new();
             }
+            // A point that passed the test against this tree would pass the local search's first
+            // test and come back unchanged: only the others are searched.
             emitted
                 .into_iter()
-                .filter_map(|x| local_search(spheres, tree, i, x, params))
+                .filter_map(|(x, feasible)| {
+                    if feasible {
+                        Some(x)
+                    } else {
+                        local_search(spheres, tree, i, x, params)
+                    }
+                })
                 .map(|x| (x, normal_at(s.center, v, x)))
                 .collect()
         })

@@ -32,3 +32,15 @@ pub fn spheres_containing(
     hits.truncate(k);
     hits.into_iter().map(|(_, j)| j).collect()
 }
+
+/// Every sphere `j != ignore` with `|x - p_j| - r_j < threshold`, in ascending index order.
+pub fn spheres_within(
+    spheres: &[Sphere],
+    x: DVec3,
+    threshold: f64,
+    ignore: Option<u32>,
+) -> Vec<u32> {
+    (0..spheres.len() as u32)
+        .filter(|&j| Some(j) != ignore && spheres[j as usize].signed_distance(x) < threshold)
+        .collect()
+}

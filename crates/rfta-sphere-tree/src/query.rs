@@ -4,9 +4,23 @@ use rfta_geom::glam::DVec3;
 
 use crate::build::{Node, SphereTree};
 
-/// Lower bound of `|x - p_j| - r_j` over the node's spheres.
+/// Lower bound of `|x - p_j| - r_j` over the node's spheres: the larger of two bounds.
+///
+/// - `dist(x, centre box) - max radius`, tight for spheres of similar radii;
+/// - the signed distance from `x` to the union of the spheres' boxes (negative inside): outside it
+///   every sphere is at least that far, and inside it no sphere can hold `x` deeper than `x`'s
+///   distance to the box's boundary, since the ball of that depth around `x` lies in the sphere
+///   and so in the box. Tight where one large sphere shares a node with small ones.
+///
+/// The second is lowered by a relative `1e-12` so that rounding never prunes a sphere the exact
+/// test would report.
 fn lower_bound(node: &Node, x: DVec3) -> f64 {
-    node.centers.distance_squared(x).sqrt() - node.max_radius
+    let by_centres = node.centers.distance_squared(x).sqrt() - node.max_radius;
+    let b = &node.bounds;
+    let d = (b.min - x).max(x - b.max);
+    let by_box = d.max(DVec3::ZERO).length() + d.max_element().min(0.0);
+    let slack = 1e-12 * (1.0 + x.abs().max_element() + (b.max - b.min).max_element());
+    by_centres.max(by_box - slack)
 }
 
 impl SphereTree {
@@ -94,6 +108,44 @@ impl SphereTree {
                 push_ordered(&mut stack, &self.nodes, node, x);
             }
         }
+    }
+
+    /// Every sphere `j != ignore` with `|x - p_j| - r_j < threshold`, into `out` in ascending
+    /// index order: the short list a caller tests many nearby points against (a point within
+    /// `e` of `x` is inside a sphere by more than `m` only if that sphere is in the list for
+    /// `threshold = e - m`).
+    pub fn spheres_within_into(
+        &self,
+        x: DVec3,
+        threshold: f64,
+        ignore: Option<u32>,
+        out: &mut Vec<u32>,
+    ) {
+        out.clear();
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((0, lower_bound(&self.nodes[0], x)));
+        while let Some((idx, lb)) = stack.pop() {
+            if lb >= threshold {
+                continue;
+            }
+            let node = &self.nodes[idx as usize];
+            if node.leaf {
+                for s in node.a as usize..(node.a + node.b) as usize {
+                    let id = self.ids[s];
+                    if Some(id) != ignore
+                        && (x - self.centers[s]).length() - self.radii[s] < threshold
+                    {
+                        out.push(id);
+                    }
+                }
+            } else {
+                push_ordered(&mut stack, &self.nodes, node, x);
+            }
+        }
+        out.sort_unstable();
     }
 
     /// [`SphereTree::inside_any`] with the reference implementation's traversal: descend into every

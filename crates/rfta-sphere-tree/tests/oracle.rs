@@ -28,6 +28,13 @@ fn check(spheres: &[Sphere], tree: &SphereTree, x: DVec3, ignore: Option<u32>) {
             expect,
             "reference order at {x}"
         );
+        let mut within = Vec::new();
+        tree.spheres_within_into(x, threshold, ignore, &mut within);
+        assert_eq!(
+            within,
+            naive::spheres_within(spheres, x, threshold, ignore),
+            "spheres_within at {x}, t={threshold}"
+        );
         for k in [1, 3, 17, usize::MAX] {
             assert_eq!(
                 tree.spheres_containing(x, k, threshold, ignore),

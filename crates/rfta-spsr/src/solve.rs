@@ -402,52 +402,86 @@ fn restrict(coarse: &Level, fine: &Level, fine_parents: &[u32], beta: &[f64]) ->
     out
 }
 
-/// `(K + S) x` on one depth.
-fn apply_a(level: &Level, sys: &LevelSystem, nbr: &[u32], x: &[f64]) -> Vec<f64> {
+/// Below this many nodes a depth's conjugate-gradient loop runs on one thread: the coarse grids
+/// are small and a parallel pass over them costs more in scheduling than in arithmetic. Every sum
+/// is taken in the same fixed chunks either way, so the result does not change.
+const SERIAL_BELOW: usize = 8 * CHUNK;
+
+/// `(K + S) x` on one depth, into `out` (`fs` is scratch for the screening cells).
+fn apply_a(
+    level: &Level,
+    sys: &LevelSystem,
+    nbr: &[u32],
+    x: &[f64],
+    fs: &mut Vec<f64>,
+    out: &mut [f64],
+) {
     let n = level.n();
-    let fs: Vec<f64> = sys
-        .screen
-        .par_iter()
-        .map(|s| {
-            let corners = &level.corners[s.cell as usize];
-            let mut f = 0.0;
-            for k in 0..8 {
-                f += s.hats[k] * x[corners[k] as usize];
+    let screen_value = |s: &ScreenCell| {
+        let corners = &level.corners[s.cell as usize];
+        let mut f = 0.0;
+        for k in 0..8 {
+            f += s.hats[k] * x[corners[k] as usize];
+        }
+        f
+    };
+    let serial = level.nodes.len() < SERIAL_BELOW;
+    fs.clear();
+    if serial {
+        fs.extend(sys.screen.iter().map(screen_value));
+    } else {
+        sys.screen.par_iter().map(screen_value).collect_into_vec(fs);
+    }
+    let fs: &[f64] = fs;
+    let row = |i: usize| {
+        if sys.fixed[i] {
+            return x[i];
+        }
+        let c = level.nodes[i];
+        let mut acc = 0.0;
+        for o in 0..27 {
+            let j = nbr[i * 27 + o];
+            if j != NONE && !sys.fixed[j as usize] {
+                acc += sys.k(c, o, n) * x[j as usize];
             }
-            f
-        })
-        .collect();
-    (0..level.nodes.len())
-        .into_par_iter()
-        .with_min_len(CHUNK)
-        .map(|i| {
-            if sys.fixed[i] {
-                return x[i];
-            }
-            let c = level.nodes[i];
-            let mut acc = 0.0;
-            for o in 0..27 {
-                let j = nbr[i * 27 + o];
-                if j != NONE && !sys.fixed[j as usize] {
-                    acc += sys.k(c, o, n) * x[j as usize];
-                }
-            }
-            for &e in &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize] {
-                let s = &sys.screen[(e >> 3) as usize];
-                acc += s.weight * s.hats[(e & 7) as usize] * fs[(e >> 3) as usize];
-            }
-            acc
-        })
-        .collect()
+        }
+        for &e in &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize] {
+            let s = &sys.screen[(e >> 3) as usize];
+            acc += s.weight * s.hats[(e & 7) as usize] * fs[(e >> 3) as usize];
+        }
+        acc
+    };
+    if serial {
+        out.iter_mut().enumerate().for_each(|(i, o)| *o = row(i));
+    } else {
+        out.par_iter_mut()
+            .with_min_len(CHUNK)
+            .enumerate()
+            .for_each(|(i, o)| *o = row(i));
+    }
 }
 
+/// `a . b`, summed per fixed chunk and then over the chunks in order (any thread count, same bits).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let chunk = |(a, b): (&[f64], &[f64])| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    if a.len() < SERIAL_BELOW {
+        return a.chunks(CHUNK).zip(b.chunks(CHUNK)).map(chunk).sum();
+    }
     a.par_chunks(CHUNK)
         .zip(b.par_chunks(CHUNK))
-        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
+        .map(chunk)
         .collect::<Vec<f64>>()
         .iter()
         .sum()
+}
+
+/// `y += a x` elementwise (serially on small vectors).
+fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
+    if y.len() < SERIAL_BELOW {
+        y.iter_mut().zip(x).for_each(|(y, x)| *y += a * x);
+    } else {
+        y.par_iter_mut().zip(x).for_each(|(y, x)| *y += a * x);
+    }
 }
 
 /// Conjugate gradients on one depth (used on the complete coarse grids).
@@ -467,26 +501,31 @@ fn conjugate_gradients(
         .map(|(&v, &f)| if f { 0.0 } else { v })
         .collect();
     let mut p = r.clone();
+    let mut ap = vec![0.0; n];
+    let mut fs = Vec::new();
     let mut rr = dot(&r, &r);
     let stop = rr * tol * tol;
     for _ in 0..iters {
         if rr <= stop || rr == 0.0 {
             break;
         }
-        let ap = apply_a(level, sys, nbr, &p);
+        apply_a(level, sys, nbr, &p, &mut fs, &mut ap);
         let pap = dot(&p, &ap);
         if pap.is_nan() || pap <= 0.0 {
             break;
         }
         let a = rr / pap;
-        x.par_iter_mut().zip(&p).for_each(|(x, p)| *x += a * p);
-        r.par_iter_mut().zip(&ap).for_each(|(r, q)| *r -= a * q);
+        axpy(&mut x, a, &p);
+        axpy(&mut r, -a, &ap);
         let rr_new = dot(&r, &r);
         let beta = rr_new / rr;
         rr = rr_new;
-        p.par_iter_mut()
-            .zip(&r)
-            .for_each(|(p, r)| *p = r + beta * *p);
+        let update = |(p, r): (&mut f64, &f64)| *p = r + beta * *p;
+        if n < SERIAL_BELOW {
+            p.iter_mut().zip(&r).for_each(update);
+        } else {
+            p.par_iter_mut().zip(&r).for_each(update);
+        }
     }
     x
 }

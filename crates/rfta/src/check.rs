@@ -16,11 +16,17 @@
 //!   magnitude of their sign, are the flat plateau of a clamped (truncated) SDF.
 //!
 //! Neither test needs the surface. Both run in `O(n log n)`.
+//!
+//! The pipeline checks at both ends: [`inspect`] and [`Params::check`]'s policy before anything
+//! is built, and the mesh (finite vertices, degenerate faces, watertightness, components) before
+//! it is returned.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use rfta_geom::SdfSamples;
 use rfta_geom::glam::DVec3;
+use rfta_geom::{SdfSamples, TriMesh};
+
+use crate::{Error, MeshCheck, Params, Report, Result};
 
 /// A separation ratio above this counts as a violation (1% above the exact bound of 1).
 pub const SEPARATION_TOLERANCE: f64 = 1.01;
@@ -190,4 +196,89 @@ pub(crate) fn describe(samples: &SdfSamples, i: usize) -> String {
         p.z,
         samples.values()[i]
     )
+}
+
+/// Runs [`inspect`] and applies [`Params::check`]'s policy.
+pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report) -> Result<()> {
+    let found = inspect(samples);
+    report.inconsistent_samples = found.inconsistent;
+    if params.clamp.is_none()
+        && let Some((c, count)) = found.clamp
+    {
+        report.clamp = Some(c);
+        report.warnings.push(format!(
+            "the values look clamped at {c}: {count} samples sit on flat plateaus at that magnitude; they are treated as at least {c} from the surface (set a clamp to override, or turn the check off)"
+        ));
+    }
+    if let Some(&i) = found
+        .beyond_extent
+        .iter()
+        .find(|&&i| report.clamp.is_none_or(|c| samples.values()[i].abs() < c))
+    {
+        let b = samples.bounds();
+        return Err(Error::NotADistance(format!(
+            "{} exceeds the diagonal {} of the samples' bounding box, which no distance to a surface crossing them can ({} such samples); if it stands for 'far away', set a clamp below it so such samples count as at least that far",
+            describe(samples, i),
+            (b.max - b.min).length(),
+            found.beyond_extent.len()
+        )));
+    }
+    if found.inconsistent > 0 {
+        let worst = found.worst.map_or(String::new(), |(i, j, r)| {
+            format!(
+                "; worst: {} and {} are {:.3e} apart, their spheres overlap by a factor {r:.3}",
+                describe(samples, i),
+                describe(samples, j),
+                (samples.position(i) - samples.position(j)).length()
+            )
+        });
+        let what = format!(
+            "{} of {} samples ({:.1}%) overlap the nearest sample of the other sign, so |s| is larger than the distance to the surface there{worst}",
+            found.inconsistent,
+            found.checked,
+            100.0 * found.inconsistent_fraction()
+        );
+        if found.severe_fraction() > params.max_inconsistent {
+            return Err(Error::NotADistance(format!(
+                "{what}; {:.1}% overlap by more than a factor {}. Is it an occupancy, density or rescaled field? Turn the check off to reconstruct anyway",
+                100.0 * found.severe_fraction(),
+                SEVERE_RATIO
+            )));
+        }
+        report.warnings.push(what);
+    }
+    Ok(())
+}
+
+/// Refuses non-finite vertices and reports degenerate faces and topology.
+pub(crate) fn mesh(mesh: &TriMesh) -> Result<MeshCheck> {
+    if let Some(i) = mesh.vertices.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFiniteOutput(i));
+    }
+    let zero_area_faces = (0..mesh.faces.len())
+        .filter(|&f| mesh.face_normal_scaled(f).length_squared() == 0.0)
+        .count();
+    let topo = rfta_mesh::Topology::of(mesh);
+    Ok(MeshCheck {
+        degenerate_faces: topo.degenerate_faces,
+        zero_area_faces,
+        watertight: topo.is_watertight(),
+        boundary_edges: topo.boundary_edges,
+        nonmanifold_edges: topo.nonmanifold_edges,
+        components: topo.components,
+    })
+}
+
+/// Cells of the finest octree level per sample spacing that [`spsr_depth_for`] aims at.
+pub const CELLS_PER_SPACING: f64 = 4.0;
+
+/// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
+/// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
+pub fn spsr_depth_for(h: f64) -> u32 {
+    let cps: f64 = std::env::var("RFTA_CPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(CELLS_PER_SPACING);
+    let cells = 3.2 * cps / h.max(1e-9);
+    (cells.log2().ceil() as i64).clamp(5, 12) as u32
 }

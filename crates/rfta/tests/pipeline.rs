@@ -39,7 +39,7 @@ fn same_mesh_at_one_two_and_four_threads_and_across_runs() {
             reconstruct(
                 &samples,
                 &Params {
-                    k_max: 2,
+                    rounds: 2,
                     threads: Some(threads),
                     ..Params::default()
                 },
@@ -79,7 +79,7 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
     let out = reconstruct(
         &samples,
         &Params {
-            k_max: 1,
+            rounds: 1,
             ..Params::default()
         },
     )
@@ -110,7 +110,7 @@ fn the_check_refuses_non_distances_and_detects_clamping() {
         .map(|i| sphere.sdf(grid.position(i)))
         .collect();
     let fast = Params {
-        k_max: 1,
+        rounds: 1,
         ..Params::default()
     };
     let with = |values: Vec<f64>| SdfSamples::grid(grid, values).expect("samples");
@@ -187,7 +187,7 @@ fn a_single_negative_sample_gives_a_finite_mesh_or_an_error_never_a_panic() {
     match reconstruct(
         &samples,
         &Params {
-            k_max: 1,
+            rounds: 1,
             ..Params::default()
         },
     ) {
@@ -250,7 +250,7 @@ fn degenerate_and_random_small_inputs_never_panic() {
     for (what, samples) in &cases {
         for check in [true, false] {
             let params = Params {
-                k_max: 1,
+                rounds: 1,
                 check,
                 ..Params::default()
             };

@@ -57,7 +57,7 @@ struct Args {
     out: Option<PathBuf>,
 }
 
-const METHODS: [&str; 3] = ["mc", "rfta", "rfta-paper"];
+const METHODS: [&str; 4] = ["mc", "rfta", "rfta-default", "rfta-paper"];
 
 fn parse(args: &[String]) -> Result<Args> {
     let mut a = Args {
@@ -274,12 +274,12 @@ fn failed_row(
 fn run_method(method: &str, grid: &Grid, values: &[f64]) -> Result<TriMesh, String> {
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
-        "rfta" | "rfta-paper" => {
+        "rfta" | "rfta-default" | "rfta-paper" => {
             // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults.
-            let params = if method == "rfta" {
-                rfta::Params::fast()
-            } else {
-                rfta::Params::paper_table()
+            let params = match method {
+                "rfta" => rfta::Params::fast(),
+                "rfta-default" => rfta::Params::default(),
+                _ => rfta::Params::paper_table(),
             };
             let samples =
                 rfta_geom::SdfSamples::grid(*grid, values.to_vec()).map_err(|e| e.to_string())?;

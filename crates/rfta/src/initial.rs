@@ -1,0 +1,114 @@
+//! Steps 2 and 3: empty space next to the spheres of each sign (rasterization), and one feasible
+//! tangency point per sphere from it.
+
+use std::time::Instant;
+
+use rfta_feasible::TangentPoints;
+use rfta_geom::glam::DVec3;
+use rfta_sphere_tree::SphereTree;
+
+use crate::normalize::UnitBox;
+use crate::params::Seeds;
+use crate::report::counted;
+use crate::{Error, Params, Report, Result, Stage};
+
+/// The initial tangency points, one sign set at a time: rasterize the set's spheres, take the
+/// nearest empty-space sample to each centre, make it feasible against a batch of the same set.
+pub(crate) fn initial_points(
+    unit: &UnitBox,
+    params: &Params,
+    report: &mut Report,
+    progress: &mut (dyn FnMut(Stage) + Send),
+) -> Result<TangentPoints> {
+    progress(Stage::Initial);
+    let t = Instant::now();
+    let n = unit.len();
+    let res = params.raster_resolution_for(n);
+    report.raster_resolution = res;
+    let backend = if params.gpu {
+        rfta_raster::Backend::Gpu
+    } else {
+        rfta_raster::Backend::Cpu
+    };
+    let fparams = params.feasible_params(n, unit.clamp);
+    let values = &unit.values;
+    let neg: Vec<u32> = (0..n as u32)
+        .filter(|&i| values[i as usize] < 0.0)
+        .collect();
+    let pos: Vec<u32> = (0..n as u32)
+        .filter(|&i| values[i as usize] >= 0.0)
+        .collect();
+    report.negative = neg.len();
+    report.non_negative = pos.len();
+    let mut parts = Vec::new();
+    for (negative, set) in [(false, &pos), (true, &neg)] {
+        if set.is_empty() {
+            continue;
+        }
+        let c: Vec<DVec3> = set.iter().map(|&i| unit.centers[i as usize]).collect();
+        let r: Vec<f64> = set
+            .iter()
+            .map(|&i| unit.spheres[i as usize].radius)
+            .collect();
+        let raster = params.raster_params(res, negative);
+        let empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+        report.empty_space_points += empty.points.len();
+        let batch = draw_batch(
+            set,
+            params.batch_size,
+            Seeds(params.seed).initial_batch(negative),
+        );
+        let tree = SphereTree::with_indices(&unit.spheres, &batch);
+        parts.push(counted(set.len(), progress, |done| {
+            rfta_feasible::initial_points_counted(
+                &unit.spheres,
+                values,
+                set,
+                &empty.points,
+                &tree,
+                &fparams,
+                done,
+            )
+        }));
+    }
+    let cloud = merge_by_owner(parts);
+    report.feasible_initial = cloud.len();
+    report.timings.push(("initial points".into(), t.elapsed()));
+    if cloud.len() < 3 {
+        return Err(Error::TooFewPoints {
+            feasible: cloud.len(),
+            spheres: n,
+        });
+    }
+    Ok(cloud)
+}
+
+/// `b` indices drawn with replacement from `set` (all of it when `b` is 0 or at least its size).
+fn draw_batch(set: &[u32], b: usize, seed: u64) -> Vec<u32> {
+    if b == 0 || b >= set.len() {
+        return set.to_vec();
+    }
+    let mut rng = rfta_geom::rng::Rng::new(seed);
+    (0..b)
+        .map(|_| set[rng.below(set.len() as u64) as usize])
+        .collect()
+}
+
+fn merge_by_owner(parts: Vec<TangentPoints>) -> TangentPoints {
+    let mut all: Vec<(u32, DVec3, DVec3)> = parts
+        .into_iter()
+        .flat_map(|p| {
+            p.owners
+                .into_iter()
+                .zip(p.points)
+                .zip(p.normals)
+                .map(|((o, x), n)| (o, x, n))
+        })
+        .collect();
+    all.sort_by_key(|e| e.0);
+    TangentPoints {
+        owners: all.iter().map(|e| e.0).collect(),
+        points: all.iter().map(|e| e.1).collect(),
+        normals: all.iter().map(|e| e.2).collect(),
+    }
+}

@@ -1,0 +1,80 @@
+//! Step 1: the samples as spheres in the reference's unit box.
+
+use rfta_geom::glam::DVec3;
+use rfta_geom::{SdfSamples, Sphere};
+
+/// The samples moved into the unit box as the reference does (subtract the per-axis minimum,
+/// divide by the largest extent), as spheres of radius `|s|` capped at the clamp.
+pub(crate) struct UnitBox {
+    trans: DVec3,
+    scale: f64,
+    /// Sphere centres (the sample positions).
+    pub(crate) centers: Vec<DVec3>,
+    /// Signed values, scaled.
+    pub(crate) values: Vec<f64>,
+    /// Spheres of radius `min(|s|, clamp)`.
+    pub(crate) spheres: Vec<Sphere>,
+    /// The clamp, scaled (`+inf` when none).
+    pub(crate) clamp: f64,
+    /// The sample spacing in the samples' coordinates ([`sample_spacing`]).
+    pub(crate) input_spacing: f64,
+}
+
+impl UnitBox {
+    pub(crate) fn new(samples: &SdfSamples, clamp: Option<f64>) -> Self {
+        let positions = samples.positions();
+        let lo = positions
+            .iter()
+            .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
+        let hi = positions
+            .iter()
+            .fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
+        let extent = (hi - lo).max_element();
+        let (trans, scale) = (lo, if extent > 0.0 { extent } else { 1.0 });
+        let centers: Vec<DVec3> = positions.iter().map(|&p| (p - trans) / scale).collect();
+        let values: Vec<f64> = samples.values().iter().map(|&s| s / scale).collect();
+        let cap = clamp.map_or(f64::INFINITY, |c| c / scale);
+        let spheres = centers
+            .iter()
+            .zip(&values)
+            .map(|(&c, &s)| Sphere::new(c, s.abs().min(cap)))
+            .collect();
+        Self {
+            trans,
+            scale,
+            centers,
+            values,
+            spheres,
+            clamp: cap,
+            input_spacing: sample_spacing(samples),
+        }
+    }
+
+    /// Number of samples.
+    pub(crate) fn len(&self) -> usize {
+        self.spheres.len()
+    }
+
+    /// A unit-box point back in the samples' coordinates.
+    pub(crate) fn to_input(&self, p: DVec3) -> DVec3 {
+        p * self.scale + self.trans
+    }
+
+    /// The sample spacing in the unit box.
+    pub(crate) fn spacing(&self) -> f64 {
+        self.input_spacing / self.scale
+    }
+}
+
+/// The grid spacing (largest axis), or for scattered samples the side of a cube holding one
+/// sample on average over their bounding box.
+pub(crate) fn sample_spacing(samples: &SdfSamples) -> f64 {
+    match samples.as_grid() {
+        Some(g) => g.spacing().max_element(),
+        None => {
+            let b = samples.bounds();
+            let e = (b.max - b.min).max(DVec3::splat(1e-300));
+            (e.x * e.y * e.z / samples.len().max(1) as f64).cbrt()
+        }
+    }
+}

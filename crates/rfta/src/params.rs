@@ -1,0 +1,241 @@
+//! [`Params`]: every setting of a reconstruction, and the stage settings derived from it.
+//!
+//! Each stage crate has its own parameter type; this module is the one place that fills them
+//! ([`Params::raster_params`], [`Params::feasible_params`], [`Params::spsr_params`]), so a setting
+//! has one owner and the pipeline never assembles stage parameters by hand.
+
+use rfta_geom::rng::hash;
+use rfta_spsr::SpsrParams;
+
+use crate::{Error, Result};
+
+/// Parameters. Lengths (`transport_step`, `tolerance`) are in the normalized unit box, as in the
+/// reference. The paper's symbols are given for each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// Fine-tuning rounds, the paper's `k_max` (10).
+    pub rounds: usize,
+    /// Maximum tangency points per sphere, the paper's `n_max` (3).
+    pub max_points_per_sphere: usize,
+    /// Spheres in each feasibility batch, drawn with replacement, the paper's `b` (10^4; 0 = all).
+    pub batch_size: usize,
+    /// Screening weight of the Poisson solves, in `rfta-spsr`'s units (30). The reference runs
+    /// PoissonRecon with 10; on the same tangency points in the reference's setting (box 3.2) our
+    /// solver needs about 30 for the same fit (bunny, N = 30: PoissonRecon at 10 reaches Chamfer
+    /// 0.00717, ours 0.00905 at 10 and 0.00679 at 30; see docs/spsr.md).
+    pub screening: f64,
+    /// Octree depth of the Poisson solves, on a box 3.2 times the unit box as in the reference;
+    /// `None` matches it to the sample spacing ([`spsr_depth_for`]). The reference always runs 10.
+    pub spsr_depth: Option<u32>,
+    /// Moves of the feasibility local search (20).
+    pub local_search_moves: usize,
+    /// Arc length of one transport step, the paper's `tau` (0.01).
+    pub transport_step: f64,
+    /// Tolerance of the inside tests (1e-4).
+    pub tolerance: f64,
+    /// Rasterization resolution; `None` for the paper's `64 ceil(n^(1/3) / 16)`.
+    pub raster_resolution: Option<usize>,
+    /// The SDF was clamped at this magnitude: samples at or beyond it get no tangency point and
+    /// their spheres are shrunk to this radius (the surface is at least that far). `None`: no
+    /// clamp unless [`Params::check`] detects one.
+    pub clamp: Option<f64>,
+    /// Inspect the samples first ([`crate::check::inspect`]): refuse values that are not a
+    /// distance (more than [`Params::max_inconsistent`] of the samples overlap a sample of the
+    /// other sign by more than [`crate::check::SEVERE_RATIO`], or a value exceeds the samples'
+    /// extent), warn about milder violations, and detect clamping when `clamp` is `None`.
+    /// Default `true`.
+    pub check: bool,
+    /// The fraction of severely inconsistent samples above which [`Params::check`] refuses (0.25).
+    pub max_inconsistent: f64,
+    /// Refuse, before any work, inputs whose [`crate::estimate_peak_memory`] exceeds this many
+    /// bytes (`None`: no limit; the command-line tool passes the memory available).
+    pub memory_limit: Option<u64>,
+    /// Seed of every random choice (raster jitter, batches); see [`Seeds`].
+    pub seed: u64,
+    /// Rasterize on the GPU when the crate is built with feature `gpu` and an adapter exists.
+    pub gpu: bool,
+    /// Worker threads (`None`: rayon's global pool). The mesh does not depend on it.
+    pub threads: Option<usize>,
+    /// Connected components whose bounding-box diagonal is below this fraction of the sample
+    /// spacing are removed (0 keeps everything). Screened Poisson leaves small closed islands next
+    /// to outlying tangency points (the reference's outputs have them too); a part that small
+    /// cannot be witnessed by the samples. Default 0.5.
+    pub min_island: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            rounds: 10,
+            max_points_per_sphere: 3,
+            batch_size: 10_000,
+            screening: 30.0,
+            spsr_depth: None,
+            local_search_moves: 20,
+            transport_step: 0.01,
+            tolerance: 1e-4,
+            raster_resolution: None,
+            clamp: None,
+            check: true,
+            max_inconsistent: 0.25,
+            memory_limit: None,
+            seed: 3452,
+            gpu: false,
+            threads: None,
+            min_island: 0.5,
+        }
+    }
+}
+
+/// Cells of the finest octree depth per sample spacing that [`spsr_depth_for`] aims at.
+///
+/// Chosen by measurement (docs/speed.md): on the dev shapes at N = 10 to 50, 4 cells per spacing
+/// give the same mean Chamfer as the reference's fixed depth 10 at a fraction of the time, and
+/// fewer cells lose accuracy.
+pub const CELLS_PER_SPACING: f64 = 4.0;
+
+/// The box of the Poisson solves, in unit boxes (the reference's `point_cloud_to_mesh`).
+const SPSR_BOX: f64 = 3.2;
+
+/// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
+/// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
+pub fn spsr_depth_for(h: f64) -> u32 {
+    let cells = SPSR_BOX * CELLS_PER_SPACING / h.max(1e-9);
+    (cells.log2().ceil() as i64).clamp(5, 12) as u32
+}
+
+impl Params {
+    /// The setting of the paper's Table 2 (its evaluation script): 20 rounds, 30 points per sphere.
+    pub fn paper_table() -> Self {
+        Self {
+            rounds: 20,
+            max_points_per_sphere: 30,
+            ..Self::default()
+        }
+    }
+
+    /// gpytoolbox's defaults (`reach_for_the_arcs` in gpytoolbox 0.3): 3 rounds, 3 points per
+    /// sphere; the setting of the shared reference results' `rfta` rows.
+    pub fn fast() -> Self {
+        Self {
+            rounds: 3,
+            ..Self::default()
+        }
+    }
+
+    /// The rasterizer's settings for one sign set (`negative` or not) at `resolution`.
+    pub fn raster_params(&self, resolution: usize, negative: bool) -> rfta_raster::RasterParams {
+        rfta_raster::RasterParams {
+            res: resolution,
+            seed: Seeds(self.seed).raster(negative),
+        }
+    }
+
+    /// The rasterization resolution for `n` samples.
+    pub fn raster_resolution_for(&self, n: usize) -> usize {
+        self.raster_resolution
+            .unwrap_or_else(|| rfta_raster::default_resolution(n))
+    }
+
+    /// The tangency-point settings for `n` samples whose spheres are capped at `clamp` (unit box).
+    pub fn feasible_params(&self, n: usize, clamp: f64) -> rfta_feasible::Params {
+        rfta_feasible::Params {
+            tol: self.tolerance,
+            local_search_iters: self.local_search_moves,
+            k_search: rfta_feasible::Params::k_search_for(n),
+            tau: self.transport_step,
+            n_max: self.max_points_per_sphere,
+            clamp,
+            ..rfta_feasible::Params::default()
+        }
+    }
+
+    /// The screened Poisson settings the pipeline runs, for samples `spacing` apart in the unit
+    /// box (`None`: unknown, depth 10 as the reference): the reference's box and degree, our
+    /// screening, and [`Params::spsr_depth`] or the depth matched to the spacing. `rfta psr
+    /// --preset rfta` runs the same.
+    pub fn spsr_params(&self, spacing: Option<f64>) -> SpsrParams {
+        let depth = self
+            .spsr_depth
+            .unwrap_or_else(|| spacing.map_or(10, spsr_depth_for));
+        SpsrParams {
+            depth,
+            screening: self.screening,
+            box_scale: SPSR_BOX,
+            threads: None,
+            ..SpsrParams::rfta_reference()
+        }
+    }
+
+    /// Whether every fine-tuning round tests feasibility against all spheres (no batching).
+    pub(crate) fn batch_holds_all(&self, n: usize) -> bool {
+        self.batch_size == 0 || self.batch_size >= n
+    }
+
+    pub(crate) fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidParams(m));
+        if self.max_points_per_sphere == 0 {
+            return bad("max_points_per_sphere must be at least 1".into());
+        }
+        if !(self.transport_step > 0.0 && self.transport_step.is_finite()) {
+            return bad(format!(
+                "transport_step must be finite and > 0, got {}",
+                self.transport_step
+            ));
+        }
+        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
+            return bad(format!(
+                "tolerance must be finite and >= 0, got {}",
+                self.tolerance
+            ));
+        }
+        if let Some(c) = self.clamp
+            && (c.is_nan() || c <= 0.0)
+        {
+            return bad(format!("clamp must be > 0, got {c}"));
+        }
+        if !(0.0..=1.0).contains(&self.max_inconsistent) {
+            return bad(format!(
+                "max_inconsistent must be in [0, 1], got {}",
+                self.max_inconsistent
+            ));
+        }
+        if self.threads == Some(0) {
+            return bad("threads must be at least 1".into());
+        }
+        if !(self.min_island >= 0.0 && self.min_island.is_finite()) {
+            return bad(format!(
+                "min_island must be finite and >= 0, got {}",
+                self.min_island
+            ));
+        }
+        if let Some(d) = self.spsr_depth
+            && !(1..=16).contains(&d)
+        {
+            return bad(format!("spsr_depth must be 1 to 16, got {d}"));
+        }
+        Ok(())
+    }
+}
+
+/// The named random streams of a run, each derived from [`Params::seed`]: one per use, so that
+/// adding a stream never shifts another.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Seeds(pub u64);
+
+impl Seeds {
+    /// Jitter of the empty-space samples of one sign set.
+    pub fn raster(self, negative: bool) -> u64 {
+        hash(self.0, if negative { 2 } else { 1 })
+    }
+
+    /// The feasibility batch of the initial points of one sign set.
+    pub fn initial_batch(self, negative: bool) -> u64 {
+        hash(self.0, if negative { 12 } else { 11 })
+    }
+
+    /// The feasibility batch of fine-tuning round `round` (1-based).
+    pub fn round_batch(self, round: usize) -> u64 {
+        hash(self.0, 100 + round as u64)
+    }
+}

@@ -1,0 +1,168 @@
+//! What a reconstruction returns and reports: [`Reconstruction`], [`Report`], [`MeshCheck`], and
+//! the [`Stage`]s a progress callback sees.
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Duration;
+
+use rfta_feasible::TangentPoints;
+use rfta_geom::TriMesh;
+
+/// A pipeline stage, for progress reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Stage {
+    /// Empty-space sampling and initial tangency points.
+    Initial,
+    /// Fine-tuning round `round` (1-based) of `of`.
+    FineTune {
+        /// This round.
+        round: usize,
+        /// All rounds.
+        of: usize,
+    },
+    /// The final screened Poisson solve.
+    Final,
+    /// Progress within the current stage: `done` of `of` spheres, reported about twice a second
+    /// while a stage runs longer than that.
+    Progress {
+        /// Spheres finished.
+        done: usize,
+        /// Spheres in the stage.
+        of: usize,
+    },
+}
+
+/// Runs `work` with a counter of finished spheres, reporting it through `progress` from a
+/// monitor thread every half second until `work` returns (the result does not depend on it).
+pub(crate) fn counted<T>(
+    of: usize,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    work: impl FnOnce(&AtomicUsize) -> T,
+) -> T {
+    let done = AtomicUsize::new(0);
+    let finished = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let monitor = scope.spawn(|| {
+            let mut last = 0;
+            loop {
+                std::thread::park_timeout(Duration::from_millis(500));
+                if finished.load(Ordering::Acquire) {
+                    break;
+                }
+                let d = done.load(Ordering::Relaxed);
+                if d != last {
+                    progress(Stage::Progress { done: d, of });
+                    last = d;
+                }
+            }
+        });
+        let out = work(&done);
+        finished.store(true, Ordering::Release);
+        monitor.thread().unpark();
+        let _ = monitor.join();
+        out
+    })
+}
+
+/// What a reconstruction did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Report {
+    /// Samples (spheres).
+    pub samples: usize,
+    /// Samples with `s < 0` and `s >= 0`.
+    pub negative: usize,
+    /// Samples with `s >= 0`.
+    pub non_negative: usize,
+    /// Rasterization resolution used.
+    pub raster_resolution: usize,
+    /// Octree depth of the screened Poisson solves.
+    pub spsr_depth: u32,
+    /// Empty-space points sampled (both signs).
+    pub empty_space_points: usize,
+    /// Spheres with a feasible initial tangency point.
+    pub feasible_initial: usize,
+    /// Tangency points before each fine-tuning round and at the end (`rounds + 1` entries unless
+    /// stopped early).
+    pub points_per_round: Vec<usize>,
+    /// Spheres without a tangency point at the end (clamped and zero-radius ones included).
+    pub spheres_without_point: usize,
+    /// Small closed islands removed from the final mesh (see [`Params::min_island`]).
+    pub islands_removed: usize,
+    /// Why fine-tuning stopped before `k_max` rounds, if it did.
+    pub stopped_early: Option<String>,
+    /// Samples that overlap a sample of the other sign (see [`check`]; 0 when not checked).
+    pub inconsistent_samples: usize,
+    /// The clamp used: [`Params::clamp`], or the one [`Params::check`] detected.
+    pub clamp: Option<f64>,
+    /// What the output mesh is like (checked before it is returned).
+    pub mesh: MeshCheck,
+    /// Things the caller should know: inconsistent samples, a detected clamp, more than 5% of the
+    /// spheres without a point, a mesh that is not watertight.
+    pub warnings: Vec<String>,
+    /// Wall time of each stage, in order.
+    pub timings: Vec<(String, Duration)>,
+}
+
+/// Checks of the output mesh.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MeshCheck {
+    /// Faces with a repeated vertex index (none unless the extraction has a bug).
+    pub degenerate_faces: usize,
+    /// Faces of zero area left in the mesh (distinct vertices at one position or on one line).
+    pub zero_area_faces: usize,
+    /// Every edge has exactly two faces.
+    pub watertight: bool,
+    /// Edges with one face.
+    pub boundary_edges: usize,
+    /// Edges with more than two faces.
+    pub nonmanifold_edges: usize,
+    /// Connected components.
+    pub components: usize,
+}
+
+/// A reconstructed mesh and how it was made.
+#[derive(Debug, Clone)]
+pub struct Reconstruction {
+    /// The mesh, in the samples' coordinates, outward-oriented.
+    pub mesh: TriMesh,
+    /// The final tangency points, in the samples' coordinates.
+    pub points: TangentPoints,
+    /// Counts and timings.
+    pub report: Report,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Instant;
+
+    #[test]
+    fn long_stages_report_progress_and_short_ones_stay_quiet() {
+        let mut seen = Vec::new();
+        let out = counted(12, &mut |s| seen.push(s), |done| {
+            for _ in 0..12 {
+                std::thread::sleep(Duration::from_millis(100));
+                done.fetch_add(1, Ordering::Relaxed);
+            }
+            7
+        });
+        assert_eq!(out, 7);
+        assert!(!seen.is_empty(), "a 1.2 s stage reports");
+        let mut last = 0;
+        for s in &seen {
+            let Stage::Progress { done, of } = *s else {
+                panic!("{s:?}");
+            };
+            assert!(of == 12 && done >= last && done <= 12, "{seen:?}");
+            last = done;
+        }
+        let mut quiet = Vec::new();
+        let start = Instant::now();
+        counted(5, &mut |s| quiet.push(s), |done| {
+            done.fetch_add(5, Ordering::Relaxed);
+        });
+        assert!(quiet.is_empty());
+        // The monitor is woken when the work ends, not after its half-second nap.
+        assert!(start.elapsed() < Duration::from_millis(400));
+    }
+}

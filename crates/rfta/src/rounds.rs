@@ -1,0 +1,102 @@
+//! Steps 4 and 5: screened Poisson reconstruction of the tangency points, then fine-tuning of the
+//! points against that surface, `rounds` times.
+
+use std::time::Instant;
+
+use rfta_feasible::TangentPoints;
+use rfta_geom::{OrientedPoints, TriMesh};
+use rfta_sphere_tree::SphereTree;
+use rfta_spsr::SpsrParams;
+
+use crate::normalize::UnitBox;
+use crate::params::Seeds;
+use crate::report::counted;
+use crate::{Params, Report, Stage};
+
+/// What lives across the rounds: the current tangency points and the settings of both stages.
+pub(crate) struct Rounds {
+    /// The tangency points, sorted by owner.
+    pub(crate) cloud: TangentPoints,
+    /// The screened Poisson setting of every solve.
+    pub(crate) spsr: SpsrParams,
+    feasible: rfta_feasible::Params,
+}
+
+impl Rounds {
+    pub(crate) fn new(unit: &UnitBox, params: &Params, cloud: TangentPoints) -> Self {
+        Self {
+            cloud,
+            spsr: params.spsr_params(Some(unit.spacing())),
+            feasible: params.feasible_params(unit.len(), unit.clamp),
+        }
+    }
+
+    /// Runs the fine-tuning rounds, stopping early (and saying why in the report) when a solve
+    /// fails or fewer than 3 points remain.
+    pub(crate) fn run(
+        &mut self,
+        unit: &UnitBox,
+        params: &Params,
+        report: &mut Report,
+        progress: &mut (dyn FnMut(Stage) + Send),
+    ) {
+        let n = unit.len();
+        report.spsr_depth = self.spsr.depth;
+        for round in 1..=params.rounds {
+            progress(Stage::FineTune {
+                round,
+                of: params.rounds,
+            });
+            report.points_per_round.push(self.cloud.len());
+            let t = Instant::now();
+            let tree = SphereTree::batch(
+                &unit.spheres,
+                params.batch_size,
+                Seeds(params.seed).round_batch(round),
+            );
+            let mesh = match solve(&self.cloud, &self.spsr) {
+                Ok(m) => m,
+                Err(e) => {
+                    report.stopped_early = Some(format!("round {round}: {e}"));
+                    break;
+                }
+            };
+            // From the second round on, with every tree holding all spheres, the points were
+            // tested against this same set last round.
+            let cloud_feasible = round > 1 && params.batch_holds_all(n);
+            let next = counted(n, progress, |done| {
+                rfta_feasible::fine_tune_counted(
+                    &unit.spheres,
+                    &unit.values,
+                    &mesh,
+                    &self.cloud,
+                    &tree,
+                    &self.feasible,
+                    cloud_feasible,
+                    done,
+                )
+            });
+            report
+                .timings
+                .push((format!("fine-tuning round {round}"), t.elapsed()));
+            if next.len() < 3 {
+                report.stopped_early = Some(format!(
+                    "round {round}: only {} feasible points remained",
+                    next.len()
+                ));
+                break;
+            }
+            self.cloud = next;
+        }
+    }
+}
+
+/// Screened Poisson reconstruction of the tangency points.
+pub(crate) fn solve(
+    cloud: &TangentPoints,
+    spsr: &SpsrParams,
+) -> std::result::Result<TriMesh, rfta_spsr::Error> {
+    let pts = OrientedPoints::new(cloud.points.clone(), cloud.normals.clone(), None)
+        .map_err(|e| rfta_spsr::Error::DegenerateInput(format!("tangency points: {e}")))?;
+    Ok(rfta_spsr::reconstruct(&pts, spsr)?.mesh)
+}
