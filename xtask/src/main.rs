@@ -4,7 +4,8 @@
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `tidy`: repository rules (see [`tidy`]).
 //! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
-//! - `bench spsr`: our screened Poisson against PoissonRecon, same clouds, same run (see [`mod@bench`]).
+//! - `bench spsr | e2e`: our screened Poisson against PoissonRecon, and the whole reconstruction
+//!   against marching cubes and gpytoolbox, same inputs, same run (see [`mod@bench`]).
 
 #![expect(
     clippy::print_stdout,
@@ -29,11 +30,15 @@ commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, shaders, tidy, eval --quick (mc, rfta)
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
-  eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-paper]
-            [--samples N] [--quick] [--out DIR]: Table 2 with marching cubes measured in the same run,
-            written to target/eval/<run>/ (results.csv, report.md, chamfer.svg, contact_sheet.png)
+  eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
+            [--samples N] [--depth D] [--quick] [--out DIR]: Table 2 with marching cubes measured in
+            the same run, written to target/eval/<run>/ (results.csv, report.md, chamfer.svg,
+            contact_sheet.png); --depth D runs every rfta method's Poisson solves at depth D
   bench     spsr [--quick] [--points N] [--depths 8,10] [--out DIR]: our sPSR and PoissonRecon
             side by side (PoissonRecon needs `cargo bench-spsr`, i.e. --features poissonrecon)
+  bench     e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny] [--out DIR]:
+            rfta (default, fast), marching cubes and gpytoolbox on the same grids, wall/CPU/memory/
+            Chamfer and ratios (release build: `cargo bench-e2e`)
 ";
 
 fn main() -> Result<()> {

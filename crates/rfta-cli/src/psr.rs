@@ -49,6 +49,9 @@ pub(crate) struct Args {
     /// Gauss-Seidel sweeps per depth.
     #[arg(long)]
     iters: Option<usize>,
+    /// Depth up to which the octree is complete (PoissonRecon's --fullDepth).
+    #[arg(long)]
+    full_depth: Option<u32>,
     /// Boundary condition.
     #[arg(long, value_enum)]
     boundary: Option<BoundaryArg>,
@@ -74,6 +77,9 @@ pub(crate) fn run(args: Args, ui: &crate::ui::Ui) -> anyhow::Result<()> {
     }
     if let Some(i) = args.iters {
         params.iterations = i;
+    }
+    if let Some(f) = args.full_depth {
+        params.full_depth = f;
     }
     if let Some(b) = args.boundary {
         params.boundary = match b {

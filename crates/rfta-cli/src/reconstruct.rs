@@ -54,6 +54,9 @@ pub(crate) struct Args {
     /// memory available now).
     #[arg(long, value_name = "SIZE", value_parser = crate::ui::parse_size)]
     max_memory: Option<u64>,
+    /// Also write the final tangency points with their normals (PLY), e.g. for `rfta psr`.
+    #[arg(long, value_name = "PLY")]
+    points: Option<PathBuf>,
     #[command(flatten)]
     tuning: Tuning,
 }
@@ -190,6 +193,9 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
 
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     crate::ui::check_output(&args.output)?;
+    if let Some(p) = &args.points {
+        crate::ui::check_output(p)?;
+    }
     let mut params = args.tuning.params();
     params.clamp = args.clamp;
     params.check = !args.no_check;
@@ -229,7 +235,19 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     let out = run_pipeline(&samples, &params, ui)
         .with_context(|| format!("{}: reconstruction failed", args.input.display()))?;
     describe(&out, ui, t.elapsed().as_secs_f64());
-    write(&args.output, &out.mesh, ui)
+    write(&args.output, &out.mesh, ui)?;
+    if let Some(path) = &args.points {
+        let p = &out.points;
+        let cloud = rfta::geom::OrientedPoints::new(p.points.clone(), p.normals.clone(), None)
+            .context("the tangency points")?;
+        rfta_io::write_oriented_points_ply(path, &cloud)?;
+        ui.say(format!(
+            "wrote {} tangency points to {}",
+            cloud.len(),
+            path.display()
+        ));
+    }
+    Ok(())
 }
 
 fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {

@@ -65,6 +65,9 @@ pub struct Params {
     pub severe: f64,
     /// Halvings of the transport step before giving up (20).
     pub halvings: usize,
+    /// A sphere whose surface the mesh passes within this distance of counts as touched in
+    /// [`fine_tune`]: its points stay where they are (0: `tol`, the reference's rule).
+    pub keep_band: f64,
 }
 
 impl Default for Params {
@@ -78,6 +81,7 @@ impl Default for Params {
             clamp: f64::INFINITY,
             severe: 0.8,
             halvings: 20,
+            keep_band: 0.0,
         }
     }
 }
@@ -433,26 +437,35 @@ pub fn fine_tune_counted(
     for i in 0..n {
         start[i + 1] += start[i];
     }
-    let point_closest: Vec<(DVec3, f64)> = if params.n_max > 1 {
-        cloud
-            .points
-            .par_iter()
-            .map(|&a| {
-                let c = index.closest_point(a);
-                (c.point, c.distance_squared.sqrt())
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let band = tol.max(params.keep_band);
     let per: Vec<Vec<(DVec3, DVec3)>> = (0..n as u32)
         .into_par_iter()
         .map(|i| {
             let s = spheres[i as usize];
             let v = values[i as usize];
             let r = s.radius;
+            if r >= params.clamp || r <= 0.0 {
+                return Vec::new();
+            }
             let cp = index.closest_point(s.center);
             let di = cp.distance_squared.sqrt();
+            let owned = start[i as usize]..start[i as usize + 1];
+            let k = owned.len();
+            let cut = di < r - band && r > tol;
+            let miss = di > r + band && r > tol;
+            let search = |x: DVec3| local_search(spheres, tree, i, x, params);
+            let oriented = |x: DVec3| (x, normal_at(s.center, v, x));
+            if k > 0 && !cut && !miss {
+                // Touched within the band: the points stay. A point that passed the test against
+                // this tree would pass the local search's first test and come back unchanged.
+                return owned
+                    .filter_map(|a| {
+                        let x = cloud.points[a];
+                        if cloud_feasible { Some(x) } else { search(x) }
+                    })
+                    .map(oriented)
+                    .collect();
+            }
             let inside_mesh = index.winding_number(s.center) > 0.5;
             let sigma = if v < 0.0 { -1.0 } else { 1.0 } * if inside_mesh { -1.0 } else { 1.0 };
             let proj = |x: DVec3| {
@@ -466,16 +479,12 @@ pub fn fine_tune_counted(
                 s.center + r * sigma * dir
             };
             let qi = proj(cp.point);
-            let owned = start[i as usize]..start[i as usize + 1];
-            let k = owned.len();
             // Each emitted point, and whether it is already known to be feasible.
             let mut emitted: Vec<(DVec3, bool)> = Vec::new();
             let mut near = Vec::new();
-            let cut = di < r - tol && r > tol;
-            let miss = di > r + tol && r > tol;
             if k == 0 {
                 emitted.push((qi, false));
-            } else if cut || miss {
+            } else {
                 let closest = owned
                     .clone()
                     .min_by(|&a, &b| {
@@ -495,46 +504,33 @@ pub fn fine_tune_counted(
                     &mut near,
                 ));
                 if cut && params.n_max > 1 {
-                    let mut by_distance: Vec<usize> = owned.collect();
-                    by_distance.sort_by(|&a, &b| {
-                        point_closest[a]
-                            .1
-                            .total_cmp(&point_closest[b].1)
-                            .then(a.cmp(&b))
-                    });
+                    // Each point's own closest point on the mesh, nearest first.
+                    let mut by_distance: Vec<(usize, DVec3, f64)> = owned
+                        .map(|a| {
+                            let c = index.closest_point(cloud.points[a]);
+                            (a, c.point, c.distance_squared.sqrt())
+                        })
+                        .collect();
+                    by_distance.sort_by(|x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)));
                     let severe = di <= params.severe * r;
                     let limit = if severe { k } else { k - 1 };
-                    for &a in by_distance.iter().take(limit.min(params.n_max - 1)) {
-                        let target = proj(point_closest[a].0);
+                    for &(a, c, _) in by_distance.iter().take(limit.min(params.n_max - 1)) {
                         emitted.push(transport_checked(
                             spheres,
                             tree,
                             i,
                             cloud.points[a],
-                            target,
+                            proj(c),
                             params,
                             &mut near,
                         ));
                     }
                 }
-            } else {
-                emitted.extend(owned.map(|a| (cloud.points[a], cloud_feasible)));
             }
-            if r >= params.clamp || r <= 0.0 {
-                return Vec::new();
-            }
-            // A point that passed the test against this tree would pass the local search's first
-            // test and come back unchanged: only the others are searched.
             emitted
                 .into_iter()
-                .filter_map(|(x, feasible)| {
-                    if feasible {
-                        Some(x)
-                    } else {
-                        local_search(spheres, tree, i, x, params)
-                    }
-                })
-                .map(|x| (x, normal_at(s.center, v, x)))
+                .filter_map(|(x, feasible)| if feasible { Some(x) } else { search(x) })
+                .map(oriented)
                 .collect()
         })
         .inspect(|_| {

@@ -200,3 +200,101 @@ fn fine_tuning_against_the_true_surface_pulls_points_onto_it() {
     );
     assert!(mean < 2e-3, "mean distance {mean}");
 }
+
+/// The reference's transport, by brute force: halve the step until no other sphere holds the
+/// point by more than `tol`, `q` when every halving fails.
+fn transport_by_halving(
+    spheres: &[Sphere],
+    i: usize,
+    a: DVec3,
+    q: DVec3,
+    params: &Params,
+) -> DVec3 {
+    let s = spheres[i];
+    if (a - q).length() < params.tol
+        || s.radius < params.tol
+        || (a - s.center).length() < params.tol
+    {
+        return a;
+    }
+    let chord = ((a - q).length() / (2.0 * s.radius)).min(1.0);
+    let mut arc = (params.tau / s.radius).min(2.0 * chord.asin()) * s.radius;
+    for _ in 0..params.halvings {
+        let y = rfta_geom::kernels::transport_on_sphere(&s, a, q, arc);
+        if min_clearance(spheres, i, y) >= -params.tol {
+            return y;
+        }
+        arc *= 0.5;
+    }
+    q
+}
+
+#[test]
+fn transport_equals_the_halving_rule_checked_by_brute_force() {
+    // Crowded random spheres, so that many steps land inside a neighbour and get halved.
+    let spheres = random_spheres(300, 11);
+    let tree = SphereTree::new(&spheres);
+    let mut rng = Rng::new(5);
+    let mut halved = 0;
+    for case in 0..2000 {
+        let i = case % spheres.len();
+        let s = spheres[i];
+        let dir = |rng: &mut Rng| {
+            DVec3::new(
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+            )
+            .normalize_or(DVec3::X)
+        };
+        let a = s.center + s.radius * dir(&mut rng);
+        let q = s.center + s.radius * dir(&mut rng);
+        let params = Params {
+            tau: [0.01, 0.05, 0.2][case % 3],
+            ..Params::default()
+        };
+        let expect = transport_by_halving(&spheres, i, a, q, &params);
+        let got = transport(&spheres, &tree, i as u32, a, q, &params);
+        assert_eq!(got, expect, "case {case}");
+        let full = rfta_geom::kernels::transport_on_sphere(&s, a, q, params.tau);
+        halved += usize::from(got != full && got != q);
+    }
+    assert!(halved > 50, "only {halved} cases needed a halving");
+}
+
+#[test]
+fn spheres_touched_within_the_keep_band_keep_their_points() {
+    let (spheres, values) = sphere_grid();
+    let tree = SphereTree::new(&spheres);
+    let mut mesh = shapes::icosphere(0.3, 4);
+    mesh.map_vertices(|v| v + DVec3::splat(0.5));
+    let base = Params {
+        k_search: Params::k_search_for(spheres.len()),
+        ..Params::default()
+    };
+    let mut cloud = TangentPoints::default();
+    for _ in 0..2 {
+        cloud = fine_tune(&spheres, &values, &mesh, &cloud, &tree, &base);
+    }
+    // The surface shifted by 0.01: within a band of 0.02 every sphere counts as touched and no
+    // point moves; with the reference's tolerance the points move toward the shifted surface.
+    let mut shifted = shapes::icosphere(0.3, 4);
+    shifted.map_vertices(|v| v + DVec3::new(0.51, 0.5, 0.5));
+    let banded = Params {
+        keep_band: 0.02,
+        ..base.clone()
+    };
+    let kept = fine_tune(&spheres, &values, &shifted, &cloud, &tree, &banded);
+    assert_eq!(kept, cloud);
+    let moved = fine_tune(&spheres, &values, &shifted, &cloud, &tree, &base);
+    let same = moved
+        .points
+        .iter()
+        .filter(|p| cloud.points.contains(p))
+        .count();
+    assert!(
+        same * 2 < cloud.len(),
+        "{same} of {} points did not move",
+        cloud.len()
+    );
+}

@@ -402,6 +402,10 @@ fn restrict(coarse: &Level, fine: &Level, fine_parents: &[u32], beta: &[f64]) ->
     out
 }
 
+/// Depths with at most this many nodes keep their index tables from the down pass of
+/// [`solve`] to the up pass instead of building them twice.
+const KEEP_TABLES_BELOW: usize = 1 << 17;
+
 /// Below this many nodes a depth's conjugate-gradient loop runs on one thread: the coarse grids
 /// are small and a parallel pass over them costs more in scheduling than in arithmetic. Every sum
 /// is taken in the same fixed chunks either way, so the result does not change.
@@ -632,16 +636,27 @@ pub(crate) fn solve(
     base: u32,
 ) -> Solution {
     let depth = levels.len() - 1;
-    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l. The big index tables exist one depth at a time.
+    // Index tables of the down pass that the up pass needs again: kept for the depths small
+    // enough (at most `KEEP_TABLES_BELOW` nodes, 14 MB a table), rebuilt for the big ones so that
+    // the big tables exist one depth at a time.
+    let small = |d: usize| levels[d].nodes.len() <= KEEP_TABLES_BELOW;
+    let mut kept_nbr: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
+    let mut kept_parents: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
+    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l.
     let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
     for d in (0..=depth).rev() {
         let nbr = neighbor_table(&levels[d]);
         let mut b = apply_g(&levels[d], &systems[d], &nbr, &v[d]);
-        drop(nbr);
+        if small(d) {
+            kept_nbr[d] = Some(nbr);
+        }
         if d < depth {
             let parents = parent_table(&levels[d + 1], &levels[d]);
             let r = restrict(&levels[d], &levels[d + 1], &parents, &beta[d + 1]);
             b.iter_mut().zip(&r).for_each(|(b, r)| *b += r);
+            if small(d + 1) {
+                kept_parents[d + 1] = Some(parents);
+            }
         }
         beta[d] = b;
     }
@@ -656,7 +671,9 @@ pub(crate) fn solve(
         // Coarser normal field and coarser solution, through exact parent-child integrals, and
         // both prolonged to this depth (they do not depend on this depth's solution).
         let (u_coarse, w_coarse) = if d > 0 {
-            let parents = parent_table(level, &levels[d - 1]);
+            let parents = kept_parents[d]
+                .take()
+                .unwrap_or_else(|| parent_table(level, &levels[d - 1]));
             let u_prev = &us[d - 1];
             let corr: Vec<f64> = (0..level.nodes.len())
                 .into_par_iter()
@@ -709,7 +726,7 @@ pub(crate) fn solve(
                 *r = 0.0;
             }
         }
-        let nbr = neighbor_table(level);
+        let nbr = kept_nbr[d].take().unwrap_or_else(|| neighbor_table(level));
         let x = if (d as u32) < base {
             conjugate_gradients(level, sys, &nbr, &rhs, params.base_iterations, 1e-6)
         } else {

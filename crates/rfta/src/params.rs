@@ -56,6 +56,10 @@ pub struct Params {
     pub gpu: bool,
     /// Worker threads (`None`: rayon's global pool). The mesh does not depend on it.
     pub threads: Option<usize>,
+    /// From round [`SETTLE_ROUNDS`]` + 1` on, a sphere whose surface the mesh passes within this
+    /// fraction of the sample spacing counts as touched and keeps its points; only the spheres the
+    /// mesh cuts or misses by more are fine-tuned (0: the reference's `tolerance` in every round).
+    pub keep_band: f64,
     /// Connected components whose bounding-box diagonal is below this fraction of the sample
     /// spacing are removed (0 keeps everything). Screened Poisson leaves small closed islands next
     /// to outlying tangency points (the reference's outputs have them too); a part that small
@@ -82,6 +86,7 @@ impl Default for Params {
             seed: 3452,
             gpu: false,
             threads: None,
+            keep_band: 0.0,
             min_island: 0.5,
         }
     }
@@ -93,6 +98,9 @@ impl Default for Params {
 /// give the same mean Chamfer as the reference's fixed depth 10 at a fraction of the time, and
 /// fewer cells lose accuracy.
 pub const CELLS_PER_SPACING: f64 = 4.0;
+
+/// Rounds fine-tuned with the reference's tolerance before [`Params::keep_band`] applies.
+pub const SETTLE_ROUNDS: usize = 2;
 
 /// The box of the Poisson solves, in unit boxes (the reference's `point_cloud_to_mesh`).
 const SPSR_BOX: f64 = 3.2;
@@ -209,6 +217,12 @@ impl Params {
                 self.min_island
             ));
         }
+        if !(self.keep_band >= 0.0 && self.keep_band.is_finite()) {
+            return bad(format!(
+                "keep_band must be finite and >= 0, got {}",
+                self.keep_band
+            ));
+        }
         if let Some(d) = self.spsr_depth
             && !(1..=16).contains(&d)
         {
@@ -237,5 +251,65 @@ impl Seeds {
     /// The feasibility batch of fine-tuning round `round` (1-based).
     pub fn round_batch(self, round: usize) -> u64 {
         hash(self.0, 100 + round as u64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_depth_puts_four_finest_cells_in_a_sample_spacing() {
+        // The finest cell of depth d on the 3.2 box is 3.2 / 2^d; four of them fit in h when
+        // 2^d >= 12.8 / h. h = 0.1 (N = 10): 128 -> 7. h = 0.05: 256 -> 8. h = 1/30: 384 -> 9
+        // (2^8 = 256 is too few). h = 1/50: 640 -> 10. h = 1/128: 1638.4 -> 11.
+        for (h, d) in [
+            (0.1, 7),
+            (0.05, 8),
+            (1.0 / 30.0, 9),
+            (1.0 / 50.0, 10),
+            (1.0 / 128.0, 11),
+        ] {
+            assert_eq!(spsr_depth_for(h), d, "h = {h}");
+        }
+        assert_eq!(spsr_depth_for(1.0), 5);
+        assert_eq!(spsr_depth_for(1e-6), 12);
+        assert_eq!(spsr_depth_for(0.0), 12);
+    }
+
+    #[test]
+    fn an_explicit_depth_wins_and_an_unknown_spacing_is_the_reference_depth() {
+        let p = Params::default();
+        assert_eq!(p.spsr_params(Some(0.05)).depth, 8);
+        assert_eq!(p.spsr_params(None).depth, 10);
+        let fixed = Params {
+            spsr_depth: Some(6),
+            ..Params::default()
+        };
+        assert_eq!(fixed.spsr_params(Some(0.05)).depth, 6);
+        assert!(
+            Params {
+                spsr_depth: Some(0),
+                ..Params::default()
+            }
+            .validate()
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn seed_streams_are_distinct() {
+        let s = Seeds(3452);
+        let mut all = vec![
+            s.raster(false),
+            s.raster(true),
+            s.initial_batch(false),
+            s.initial_batch(true),
+        ];
+        all.extend((1..=30).map(|r| s.round_batch(r)));
+        let n = all.len();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), n);
     }
 }

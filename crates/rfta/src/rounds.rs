@@ -64,6 +64,10 @@ impl Rounds {
             // From the second round on, with every tree holding all spheres, the points were
             // tested against this same set last round.
             let cloud_feasible = round > 1 && params.batch_holds_all(n);
+            let mut feasible = self.feasible.clone();
+            if round > crate::params::SETTLE_ROUNDS {
+                feasible.keep_band = params.keep_band * unit.spacing();
+            }
             let next = counted(n, progress, |done| {
                 rfta_feasible::fine_tune_counted(
                     &unit.spheres,
@@ -71,7 +75,7 @@ impl Rounds {
                     &mesh,
                     &self.cloud,
                     &tree,
-                    &self.feasible,
+                    &feasible,
                     cloud_feasible,
                     done,
                 )

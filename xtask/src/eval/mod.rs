@@ -2,9 +2,12 @@
 //! the same run, scored against the ground truth, next to the reference results when present.
 //!
 //! ```text
-//! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-paper]
-//!                  [--samples N] [--quick] [--out DIR]
+//! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
+//!                  [--samples N] [--depth D] [--quick] [--out DIR]
 //! ```
+//!
+//! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
+//! depth matched to the sample spacing (the depth table of docs/speed.md).
 //!
 //! `--inputs DIR` takes prepared inputs (`NAME/gt.obj`, `NAME/sdf_n{N}.npy`) as they are; a
 //! missing grid is sampled from `gt.obj`. `--meshes DIR` takes raw meshes, normalises each (box
@@ -37,6 +40,8 @@ pub(crate) struct Row {
     pub(crate) n: usize,
     pub(crate) method: String,
     pub(crate) seconds: f64,
+    /// CPU seconds of this process (all threads) while the method ran.
+    pub(crate) cpu_seconds: f64,
     pub(crate) chamfer: f64,
     pub(crate) hausdorff: f64,
     pub(crate) e_sdf: f64,
@@ -53,6 +58,7 @@ struct Args {
     res: Vec<usize>,
     methods: Vec<String>,
     samples: usize,
+    depth: Option<u32>,
     quick: bool,
     out: Option<PathBuf>,
 }
@@ -66,6 +72,7 @@ fn parse(args: &[String]) -> Result<Args> {
         res: vec![10, 20, 30],
         methods: METHODS.iter().map(|m| m.to_string()).collect(),
         samples: 1_000_000,
+        depth: None,
         quick: false,
         out: None,
     };
@@ -89,6 +96,13 @@ fn parse(args: &[String]) -> Result<Args> {
                 }
             }
             "--samples" => a.samples = value()?.parse().context("--samples takes a number")?,
+            "--depth" => {
+                a.depth = Some(
+                    value()?
+                        .parse()
+                        .context("--depth takes a number (1 to 16)")?,
+                )
+            }
             "--quick" => a.quick = true,
             "--out" => a.out = Some(PathBuf::from(value()?)),
             other => bail!("unknown eval option '{other}'"),
@@ -155,6 +169,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                     n,
                     method: method.clone(),
                     seconds: 0.0,
+                    cpu_seconds: 0.0,
                     chamfer: f64::NAN,
                     hausdorff: f64::NAN,
                     e_sdf: f64::NAN,
@@ -179,8 +194,10 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             for method in &a.methods {
                 bar.set_message(format!("{} n={n} {method}", shape.name));
                 let t = Instant::now();
-                let result = run_method(method, &grid, &values);
+                let cpu = crate::bench::process_usage().0;
+                let result = run_method(method, &grid, &values, a.depth);
                 let seconds = t.elapsed().as_secs_f64();
+                let cpu_seconds = crate::bench::process_usage().0 - cpu;
                 let row = match result {
                     Ok(mesh) if !mesh.is_empty() => {
                         let s = rfta_metrics::MeshSummary::of(&mesh);
@@ -197,6 +214,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                             n,
                             method: method.clone(),
                             seconds,
+                            cpu_seconds,
                             chamfer,
                             hausdorff,
                             e_sdf,
@@ -211,11 +229,18 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                         shape,
                         n,
                         method,
-                        seconds,
+                        (seconds, cpu_seconds),
                         gt_summary.genus,
                         "empty mesh".into(),
                     ),
-                    Err(e) => failed_row(shape, n, method, seconds, gt_summary.genus, e),
+                    Err(e) => failed_row(
+                        shape,
+                        n,
+                        method,
+                        (seconds, cpu_seconds),
+                        gt_summary.genus,
+                        e,
+                    ),
                 };
                 rows.push(row);
                 bar.inc(1);
@@ -250,7 +275,7 @@ fn failed_row(
     shape: &Shape,
     n: usize,
     method: &str,
-    seconds: f64,
+    (seconds, cpu_seconds): (f64, f64),
     gt_genus: Option<i64>,
     why: String,
 ) -> Row {
@@ -259,6 +284,7 @@ fn failed_row(
         n,
         method: method.to_string(),
         seconds,
+        cpu_seconds,
         chamfer: f64::NAN,
         hausdorff: f64::NAN,
         e_sdf: f64::NAN,
@@ -271,15 +297,23 @@ fn failed_row(
 }
 
 /// Runs one method; an error is recorded in the row's status, so the run goes on.
-fn run_method(method: &str, grid: &Grid, values: &[f64]) -> Result<TriMesh, String> {
+fn run_method(
+    method: &str,
+    grid: &Grid,
+    values: &[f64],
+    depth: Option<u32>,
+) -> Result<TriMesh, String> {
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
         "rfta" | "rfta-default" | "rfta-paper" => {
             // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults.
-            let params = match method {
-                "rfta" => rfta::Params::fast(),
-                "rfta-default" => rfta::Params::default(),
-                _ => rfta::Params::paper_table(),
+            let params = rfta::Params {
+                spsr_depth: depth,
+                ..match method {
+                    "rfta" => rfta::Params::fast(),
+                    "rfta-default" => rfta::Params::default(),
+                    _ => rfta::Params::paper_table(),
+                }
             };
             let samples =
                 rfta_geom::SdfSamples::grid(*grid, values.to_vec()).map_err(|e| e.to_string())?;
@@ -292,7 +326,7 @@ fn run_method(method: &str, grid: &Grid, values: &[f64]) -> Result<TriMesh, Stri
 }
 
 /// The grid of a shape at resolution `n`: the prepared `sdf_n{n}.npy` if present, else sampled.
-fn grid_for(shape: &Shape, gt: &MeshIndex, n: usize) -> Result<(Grid, Vec<f64>)> {
+pub(crate) fn grid_for(shape: &Shape, gt: &MeshIndex, n: usize) -> Result<(Grid, Vec<f64>)> {
     if let Some(dir) = &shape.dir {
         let path = dir.join(format!("sdf_n{n}.npy"));
         if path.is_file() {
@@ -310,7 +344,7 @@ fn grid_for(shape: &Shape, gt: &MeshIndex, n: usize) -> Result<(Grid, Vec<f64>)>
 /// Shapes that load, and `(name, reason)` for those that do not.
 type Loaded = (Vec<Shape>, Vec<(String, String)>);
 
-fn load_inputs(dir: &Path) -> Result<Loaded> {
+pub(crate) fn load_inputs(dir: &Path) -> Result<Loaded> {
     let mut shapes = Vec::new();
     let mut unreadable = Vec::new();
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)

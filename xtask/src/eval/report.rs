@@ -54,17 +54,18 @@ pub(crate) fn read_reference(path: &Path) -> Reference {
 
 pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "shape,n,method,seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,status\n",
+        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,status\n",
     );
     for r in rows {
         let g = |v: Option<i64>| v.map(|g| g.to_string()).unwrap_or_default();
         writeln!(
             s,
-            "{},{},{},{:.6},{:.6},{:.6},{:.6},{},{},{},{},{}",
+            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{}",
             r.shape,
             r.n,
             r.method,
             r.seconds,
+            r.cpu_seconds,
             r.chamfer,
             r.hausdorff,
             r.e_sdf,
@@ -202,11 +203,11 @@ pub(crate) fn write_markdown(
     writeln!(s, "## Time\n")?;
     writeln!(
         s,
-        "Mean wall seconds per shape (reference: CPU seconds on a shared 2-core machine).\n"
+        "Mean wall and CPU seconds per shape (reference: CPU seconds on a shared 2-core machine).\n"
     )?;
     writeln!(
         s,
-        "| N | method | seconds | reference | ratio to mc |\n|---|---|---|---|---|"
+        "| N | method | seconds | CPU seconds | reference CPU seconds | reference CPU / ours | ratio to mc |\n|---|---|---|---|---|---|---|"
     )?;
     for &n in res {
         let mc = mean(
@@ -220,6 +221,7 @@ pub(crate) fn write_markdown(
                 .filter(|r| r.n == n && &r.method == m && r.status == "ok")
                 .collect();
             let t = mean(sel.iter().map(|r| r.seconds));
+            let cpu = mean(sel.iter().map(|r| r.cpu_seconds));
             let rt = mean(
                 rows.iter()
                     .filter(|r| r.n == n && &r.method == m)
@@ -229,10 +231,15 @@ pub(crate) fn write_markdown(
                 (Some((a, _)), Some((b, _))) if b > 0.0 => format!("{:.1}", a / b),
                 _ => "n/a".into(),
             };
+            let speedup = match (cpu, rt) {
+                (Some((a, _)), Some((b, _))) if a > 0.0 => format!("{:.1}", b / a),
+                _ => "n/a".into(),
+            };
             writeln!(
                 s,
-                "| {n} | {m} | {} | {} | {ratio} |",
+                "| {n} | {m} | {} | {} | {} | {speedup} | {ratio} |",
                 fmt(t, sel.len().max(1)),
+                fmt(cpu, sel.len().max(1)),
                 fmt(rt, 1).split(' ').next().unwrap_or("n/a")
             )?;
         }

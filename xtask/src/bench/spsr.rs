@@ -43,15 +43,12 @@ struct RunResult {
     watertight: bool,
 }
 
-/// Entry: `bench spsr [--quick] [--points N] [--depths 8,10] [--out DIR]`.
+/// Entry: `bench spsr [--quick] [--points N] [--depths 8,10] [--out DIR]` (`args` after `spsr`).
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    if args.first().map(String::as_str) != Some("spsr") {
-        bail!("usage: cargo xtask bench spsr [--quick] [--points N] [--depths 8,10] [--out DIR]");
-    }
     let mut points = 100_000usize;
     let mut depths = vec![8u32, 10];
     let mut out = root.join("target/bench");
-    let mut it = args[1..].iter();
+    let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => {
@@ -201,7 +198,7 @@ fn child(
     } else {
         Command::new(exe)
     };
-    cmd.args(["bench-child", solver])
+    cmd.args(["bench-child", "spsr", solver])
         .arg(&cloud.path)
         .arg(&mesh_path)
         .arg(depth.to_string())
@@ -252,10 +249,10 @@ fn child(
     })
 }
 
-/// The child: `bench-child SOLVER CLOUD MESH DEPTH THREADS`; prints one JSON line.
+/// The child: `bench-child spsr SOLVER CLOUD MESH DEPTH THREADS`; prints one JSON line.
 pub(crate) fn child_main(args: &[String]) -> Result<()> {
     let [solver, cloud, mesh_out, depth, threads] = args else {
-        bail!("bench-child SOLVER CLOUD MESH DEPTH THREADS");
+        bail!("bench-child spsr SOLVER CLOUD MESH DEPTH THREADS");
     };
     let depth: u32 = depth.parse()?;
     let threads: usize = threads.parse()?;
@@ -275,7 +272,7 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         other => bail!("unknown solver {other}"),
     };
     let wall = t.elapsed().as_secs_f64();
-    let (cpu, rss_mb) = process_usage();
+    let (cpu, rss_mb) = super::process_usage();
     rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
     println!("{{\"wall\": {wall}, \"cpu\": {cpu}, \"rss_mb\": {rss_mb}}}");
     Ok(())
@@ -321,26 +318,4 @@ fn poissonrecon_mesh(points: &OrientedPoints, depth: u32) -> Result<TriMesh> {
 #[cfg(not(feature = "poissonrecon"))]
 fn poissonrecon_mesh(_: &OrientedPoints, _: u32) -> Result<TriMesh> {
     bail!("xtask was built without PoissonRecon: run `cargo bench-spsr` (--features poissonrecon)")
-}
-
-/// CPU seconds (user + system) and peak resident memory (MB) of this process, from `/proc`.
-fn process_usage() -> (f64, f64) {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // Fields after the parenthesised command name; utime and stime are the 12th and 13th.
-    let rest = stat.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| {
-        f.get(i)
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(f64::NAN)
-    };
-    let cpu = (ticks(11) + ticks(12)) / 100.0;
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    let rss = status
-        .lines()
-        .find(|l| l.starts_with("VmHWM:"))
-        .and_then(|l| l.split_whitespace().nth(1))
-        .and_then(|v| v.parse::<f64>().ok())
-        .map_or(f64::NAN, |kb| kb / 1024.0);
-    (cpu, rss)
 }

@@ -1,0 +1,476 @@
+//! `cargo xtask bench e2e`: where the reconstruction stands, end to end, in one run.
+//!
+//! ```text
+//! cargo bench-e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny]
+//!                 [--out DIR]
+//! ```
+//!
+//! On the dev shapes' prepared grids (`../shared/data/inputs/NAME/sdf_n{N}.npy`, N from `--res`)
+//! and on one shape's grids at the `--large` resolutions (sampled here with `rfta sample`'s code:
+//! the exact signed distance to `gt.obj` on `linspace(-1, 1, N + 1)^3`), it runs:
+//!
+//! - `rfta` (the default preset) on 2 threads, and on 1 thread at the first `--res`, for the
+//!   thread speed-up;
+//! - `rfta-fast` (`--preset fast`, gpytoolbox's 3 rounds) on 2 threads;
+//! - `mc`, marching cubes;
+//! - `gpytoolbox`, `reach_for_the_arcs` with its defaults, when a Python with gpytoolbox is found
+//!   (`--python PATH`, else `python3`); on the `--res` grids only (the reference did not finish
+//!   N = 50 within 20 minutes).
+//!
+//! Each run is a child process of its own: wall and CPU seconds of the reconstruction call, peak
+//! resident memory of the child. The parent scores every mesh against `gt.obj` (the paper's
+//! Chamfer, 2 x 10^5 samples per side) and writes `e2e.md` and `e2e.csv` to `--out`
+//! (`target/bench`), with the ratios of gpytoolbox's CPU time to ours and ours to marching cubes'.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use rfta_geom::{Grid, Layout, TriMesh};
+use rfta_mesh::MeshIndex;
+
+/// One input grid.
+struct Input {
+    shape: String,
+    n: usize,
+    path: PathBuf,
+    gt: PathBuf,
+}
+
+/// One measured run.
+struct Run {
+    wall: f64,
+    cpu: f64,
+    rss_mb: f64,
+    chamfer: f64,
+    faces: usize,
+    watertight: bool,
+}
+
+struct Args {
+    quick: bool,
+    python: Option<String>,
+    res: Vec<usize>,
+    large: Vec<usize>,
+    shape: String,
+    out: PathBuf,
+}
+
+fn parse(root: &Path, args: &[String]) -> Result<Args> {
+    let mut a = Args {
+        quick: false,
+        python: None,
+        res: vec![20, 30],
+        large: vec![64, 128],
+        shape: "bunny".into(),
+        out: root.join("target/bench"),
+    };
+    let list = |v: &str| -> Result<Vec<usize>> {
+        v.split(',')
+            .filter(|t| !t.trim().is_empty())
+            .map(|t| {
+                t.trim()
+                    .parse::<usize>()
+                    .context("a list of numbers like 20,30")
+            })
+            .collect()
+    };
+    let mut it = args.iter();
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().with_context(|| format!("{flag} needs a value"));
+        match flag.as_str() {
+            "--quick" => a.quick = true,
+            "--python" => a.python = Some(value()?.clone()),
+            "--res" => a.res = list(value()?)?,
+            "--large" => a.large = list(value()?)?,
+            "--shape" => a.shape = value()?.clone(),
+            "--out" => a.out = PathBuf::from(value()?),
+            other => bail!("unknown bench e2e option '{other}'"),
+        }
+    }
+    if a.quick {
+        a.res = vec![20];
+        a.large.clear();
+    }
+    Ok(a)
+}
+
+/// Entry: `bench e2e ...` (`args` after `e2e`).
+pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
+    let a = parse(root, args)?;
+    let data = std::env::var_os("RFTA_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("../shared/data"));
+    let inputs_dir = data.join("inputs");
+    std::fs::create_dir_all(&a.out)?;
+    let mut inputs = Vec::new();
+    let mut shapes: Vec<PathBuf> = std::fs::read_dir(&inputs_dir)
+        .with_context(|| format!("cannot read {}", inputs_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("gt.obj").is_file())
+        .collect();
+    shapes.sort();
+    if a.quick {
+        shapes.truncate(2);
+    }
+    for &n in &a.res {
+        for dir in &shapes {
+            let path = dir.join(format!("sdf_n{n}.npy"));
+            if path.is_file() {
+                inputs.push(Input {
+                    shape: name_of(dir),
+                    n,
+                    path,
+                    gt: dir.join("gt.obj"),
+                });
+            }
+        }
+    }
+    let large_gt = inputs_dir.join(&a.shape).join("gt.obj");
+    if !a.large.is_empty() {
+        let gt = rfta_io::read_mesh(&large_gt)?;
+        let index = MeshIndex::new(&gt)?;
+        for &n in &a.large {
+            let path = a.out.join(format!("{}_n{n}.npy", a.shape));
+            if !path.is_file() {
+                println!("sampling {} at {}^3", a.shape, n + 1);
+                let grid = Grid::cube(n, -1.0, 1.0)?;
+                let values = index.signed_distance_grid(&grid, &|| {});
+                rfta_io::write_sdf_grid(&path, &grid, &values)?;
+            }
+            inputs.push(Input {
+                shape: a.shape.clone(),
+                n,
+                path,
+                gt: large_gt.clone(),
+            });
+        }
+    }
+    let python = find_python(a.python.as_deref(), &a.out)?;
+    match &python {
+        Some(p) => println!("gpytoolbox: {}", p.display()),
+        None => println!("gpytoolbox: no Python with gpytoolbox found (--python PATH); skipped"),
+    }
+    let exe = std::env::current_exe()?;
+    let mut methods: Vec<(&str, usize)> = vec![("rfta", 2), ("rfta-fast", 2), ("mc", 1)];
+    let mut csv = String::from(
+        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status\n",
+    );
+    let mut rows: Vec<(String, usize, String, usize, Result<Run>)> = Vec::new();
+    for input in &inputs {
+        let gt = rfta_io::read_mesh(&input.gt)?;
+        let gt_index = MeshIndex::new(&gt)?;
+        let mut these = methods.clone();
+        if Some(&input.n) == a.res.first() {
+            these.push(("rfta", 1));
+        }
+        if python.is_some() && a.res.contains(&input.n) {
+            these.push(("gpytoolbox", 1));
+        }
+        for &(method, threads) in &these {
+            let mesh_path = a.out.join(format!(
+                "{}_n{}_{method}_t{threads}.ply",
+                input.shape, input.n
+            ));
+            let r = child(&exe, python.as_deref(), method, threads, input, &mesh_path).and_then(
+                |(wall, cpu, rss_mb)| {
+                    let mesh = rfta_io::read_mesh(&mesh_path)?;
+                    let index = MeshIndex::new(&mesh)?;
+                    let chamfer = rfta_metrics::chamfer_indexed(
+                        (&gt, &gt_index),
+                        (&mesh, &index),
+                        200_000,
+                        1,
+                    );
+                    Ok(Run {
+                        wall,
+                        cpu,
+                        rss_mb,
+                        chamfer,
+                        faces: mesh.n_faces(),
+                        watertight: rfta_mesh::Topology::of(&mesh).is_watertight(),
+                    })
+                },
+            );
+            match &r {
+                Ok(r) => {
+                    println!(
+                        "{} n={} {method} t{threads}: {:.2} s wall, {:.2} CPU-s, {:.0} MB, Chamfer {:.5}",
+                        input.shape, input.n, r.wall, r.cpu, r.rss_mb, r.chamfer
+                    );
+                    writeln!(
+                        csv,
+                        "{},{},{method},{threads},{:.3},{:.3},{:.0},{:.6},{},{},ok",
+                        input.shape,
+                        input.n,
+                        r.wall,
+                        r.cpu,
+                        r.rss_mb,
+                        r.chamfer,
+                        r.faces,
+                        r.watertight
+                    )?;
+                }
+                Err(e) => {
+                    println!(
+                        "{} n={} {method} t{threads}: failed: {e:#}",
+                        input.shape, input.n
+                    );
+                    writeln!(
+                        csv,
+                        "{},{},{method},{threads},,,,,,,{}",
+                        input.shape,
+                        input.n,
+                        format!("{e:#}").replace([',', '\n'], ";")
+                    )?;
+                }
+            }
+            rows.push((input.shape.clone(), input.n, method.to_string(), threads, r));
+        }
+    }
+    methods.push(("rfta", 1));
+    methods.push(("gpytoolbox", 1));
+    let report = report(&rows, &inputs, &methods)?;
+    std::fs::write(a.out.join("e2e.csv"), csv)?;
+    std::fs::write(a.out.join("e2e.md"), &report)?;
+    println!("\n{report}\nwrote {}", a.out.join("e2e.md").display());
+    Ok(())
+}
+
+fn name_of(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The tables: per N and method, means over the shapes that every method finished, and the
+/// ratios; then every row.
+fn report(
+    rows: &[(String, usize, String, usize, Result<Run>)],
+    inputs: &[Input],
+    methods: &[(&str, usize)],
+) -> Result<String> {
+    let mut s = String::new();
+    writeln!(
+        s,
+        "| N | shapes | method | threads | wall s | CPU s | peak MB | Chamfer | gpytoolbox CPU / this | this CPU / mc |"
+    )?;
+    writeln!(s, "|{}", "---|".repeat(10))?;
+    let mut ns: Vec<usize> = inputs.iter().map(|i| i.n).collect();
+    ns.dedup();
+    for &n in &ns {
+        let find = |shape: &str, m: &str, t: usize| {
+            rows.iter().find_map(|(sh, nn, mm, tt, r)| {
+                (sh == shape && *nn == n && mm == m && *tt == t)
+                    .then_some(r.as_ref().ok())
+                    .flatten()
+            })
+        };
+        let shapes: Vec<&str> = inputs
+            .iter()
+            .filter(|i| i.n == n)
+            .map(|i| i.shape.as_str())
+            .collect();
+        for &(m, t) in methods {
+            // Shapes this method and marching cubes both finished (gpytoolbox too, when it ran).
+            let ok: Vec<&str> = shapes
+                .iter()
+                .copied()
+                .filter(|sh| find(sh, m, t).is_some() && find(sh, "mc", 1).is_some())
+                .collect();
+            if ok.is_empty() {
+                continue;
+            }
+            let mean = |f: &dyn Fn(&Run) -> f64, m: &str, t: usize| {
+                ok.iter()
+                    .filter_map(|sh| find(sh, m, t))
+                    .map(f)
+                    .sum::<f64>()
+                    / ok.len() as f64
+            };
+            let cpu = mean(&|r| r.cpu, m, t);
+            let gpy: Vec<f64> = ok
+                .iter()
+                .filter_map(|sh| find(sh, "gpytoolbox", 1).map(|r| r.cpu))
+                .collect();
+            let vs_gpy = if gpy.len() == ok.len() && m != "gpytoolbox" {
+                format!("{:.1}", gpy.iter().sum::<f64>() / ok.len() as f64 / cpu)
+            } else {
+                "-".into()
+            };
+            let mc = mean(&|r| r.cpu, "mc", 1);
+            let vs_mc = if m != "mc" && mc > 0.0 {
+                format!("{:.0}", cpu / mc)
+            } else {
+                "-".into()
+            };
+            writeln!(
+                s,
+                "| {n} | {} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {vs_gpy} | {vs_mc} |",
+                ok.len(),
+                mean(&|r| r.wall, m, t),
+                cpu,
+                ok.iter()
+                    .filter_map(|sh| find(sh, m, t))
+                    .map(|r| r.rss_mb)
+                    .fold(0.0, f64::max),
+                mean(&|r| r.chamfer, m, t),
+            )?;
+        }
+    }
+    writeln!(
+        s,
+        "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (marching cubes: 10 ms resolution).\n"
+    )?;
+    writeln!(
+        s,
+        "| shape | N | method | threads | wall s | CPU s | peak MB | Chamfer | faces | watertight |"
+    )?;
+    writeln!(s, "|{}", "---|".repeat(10))?;
+    for (shape, n, m, t, r) in rows {
+        match r {
+            Ok(r) => writeln!(
+                s,
+                "| {shape} | {n} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {} | {} |",
+                r.wall, r.cpu, r.rss_mb, r.chamfer, r.faces, r.watertight
+            )?,
+            Err(e) => writeln!(
+                s,
+                "| {shape} | {n} | {m} | {t} | failed: {} |||||",
+                format!("{e:#}").replace(['|', '\n'], " ")
+            )?,
+        }
+    }
+    Ok(s)
+}
+
+/// A Python that imports gpytoolbox: `--python`, else `python3` if it has it.
+fn find_python(given: Option<&str>, out: &Path) -> Result<Option<PathBuf>> {
+    let candidate = given.unwrap_or("python3");
+    let ok = Command::new(candidate)
+        .args(["-c", "import gpytoolbox, numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        if given.is_some() {
+            bail!("{candidate} cannot import gpytoolbox and numpy");
+        }
+        return Ok(None);
+    }
+    std::fs::write(out.join("gpytoolbox_child.py"), PYTHON_CHILD)?;
+    Ok(Some(PathBuf::from(candidate)))
+}
+
+/// gpytoolbox's `reach_for_the_arcs` with its defaults on a grid; one JSON line out.
+const PYTHON_CHILD: &str = r#"import json, resource, sys, time
+import numpy as np
+import gpytoolbox as gpy
+sdf, out = sys.argv[1], sys.argv[2]
+lo = [float(v) for v in sys.argv[3:6]]
+hi = [float(v) for v in sys.argv[6:9]]
+S = np.load(sdf)
+axes = [np.linspace(lo[a], hi[a], S.shape[a]) for a in range(3)]
+X, Y, Z = np.meshgrid(*axes, indexing="ij")
+U = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+t, c = time.perf_counter(), time.process_time()
+V, F = gpy.reach_for_the_arcs(U, S.ravel())
+wall, cpu = time.perf_counter() - t, time.process_time() - c
+gpy.write_mesh(out, V, F)
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+print(json.dumps({"wall": wall, "cpu": cpu, "rss_mb": rss}))
+"#;
+
+/// Runs one method in a child process; `(wall, cpu, peak MB)`.
+fn child(
+    exe: &Path,
+    python: Option<&Path>,
+    method: &str,
+    threads: usize,
+    input: &Input,
+    mesh: &Path,
+) -> Result<(f64, f64, f64)> {
+    let mut cmd = if method == "gpytoolbox" {
+        let python = python.context("no Python with gpytoolbox")?;
+        let raw = rfta_io::read_sdf(&input.path, None)?;
+        let Layout::Grid(g) = raw.layout else {
+            bail!("{} is not a grid", input.path.display());
+        };
+        let b = g.bounds();
+        let mut c = Command::new(python);
+        let script = mesh
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join("gpytoolbox_child.py");
+        c.arg(script)
+            .arg(&input.path)
+            .arg(mesh.with_extension("obj"));
+        for v in b.min.to_array().into_iter().chain(b.max.to_array()) {
+            c.arg(v.to_string());
+        }
+        c
+    } else {
+        let mut c = Command::new(exe);
+        c.args(["bench-child", "e2e", method])
+            .arg(&input.path)
+            .arg(mesh)
+            .arg(threads.to_string());
+        c
+    };
+    cmd.env("RAYON_NUM_THREADS", threads.to_string())
+        .env("OMP_NUM_THREADS", threads.to_string());
+    let o = cmd.output().context("start the benchmark child")?;
+    if !o.status.success() {
+        bail!("{}", String::from_utf8_lossy(&o.stderr).trim());
+    }
+    if method == "gpytoolbox" {
+        // Scored as PLY like the others.
+        let m = rfta_io::read_mesh(&mesh.with_extension("obj"))?;
+        rfta_io::write_mesh(mesh, &m)?;
+    }
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = stdout.lines().last().unwrap_or_default();
+    let v: serde_json::Value = serde_json::from_str(line.trim()).context("child output")?;
+    let get = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    Ok((get("wall"), get("cpu"), get("rss_mb")))
+}
+
+/// The child: `bench-child e2e METHOD SDF MESH THREADS`; prints one JSON line.
+pub(crate) fn child_main(args: &[String]) -> Result<()> {
+    let [method, sdf, mesh_out, threads] = args else {
+        bail!("bench-child e2e METHOD SDF MESH THREADS");
+    };
+    let threads: usize = threads.parse()?;
+    let path = Path::new(sdf);
+    let samples = rfta_io::read_sdf(path, None)?.validate(path)?;
+    let cpu0 = super::process_usage().0;
+    let t = Instant::now();
+    let mesh: TriMesh = match method.as_str() {
+        "mc" => {
+            let grid = samples.as_grid().context("marching cubes needs a grid")?;
+            rfta_mc::marching_cubes(grid, samples.values(), 0.0)
+        }
+        "rfta" | "rfta-fast" => {
+            let base = if method == "rfta" {
+                rfta::Params::default()
+            } else {
+                rfta::Params::fast()
+            };
+            let params = rfta::Params {
+                threads: Some(threads),
+                ..base
+            };
+            rfta::reconstruct(&samples, &params)?.mesh
+        }
+        other => bail!("unknown method {other}"),
+    };
+    let wall = t.elapsed().as_secs_f64();
+    let (cpu, rss_mb) = super::process_usage();
+    rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
+    println!(
+        "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}}}",
+        cpu - cpu0
+    );
+    Ok(())
+}
