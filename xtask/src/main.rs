@@ -31,9 +31,10 @@ commands:
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
-            [--samples N] [--depth D] [--quick] [--out DIR]: Table 2 with marching cubes measured in
-            the same run, written to target/eval/<run>/ (results.csv, report.md, chamfer.svg,
-            contact_sheet.png); --depth D runs every rfta method's Poisson solves at depth D
+            [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]: Table 2 with marching
+            cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
+            chamfer.svg, contact_sheet.png); --depth and --owner-band override the rfta methods'
+            Poisson depth and owner band (0: every sphere owns points)
   bench     spsr [--quick] [--points N] [--depths 8,10] [--out DIR]: our sPSR and PoissonRecon
             side by side (PoissonRecon needs `cargo bench-spsr`, i.e. --features poissonrecon)
   bench     e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny] [--out DIR]:

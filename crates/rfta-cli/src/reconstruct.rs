@@ -94,6 +94,10 @@ pub(crate) struct Tuning {
     /// Remove closed islands smaller than this fraction of the sample spacing (0 keeps all).
     #[arg(long)]
     min_island: Option<f64>,
+    /// Spheres farther than this many sample spacings from the surface own no tangency point
+    /// (they stay constraints); 0 gives every sphere points, as the reference.
+    #[arg(long, value_name = "SPACINGS")]
+    owner_band: Option<f64>,
     /// Octree depth of the screened Poisson solves (default: matched to the sample spacing,
     /// 4 finest cells per spacing; the reference always uses 10).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
@@ -122,6 +126,9 @@ impl Tuning {
         }
         if self.depth.is_some() {
             p.spsr_depth = self.depth;
+        }
+        if let Some(b) = self.owner_band {
+            p.owner_band = (b > 0.0).then_some(b);
         }
         p
     }
@@ -160,8 +167,8 @@ fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::
 fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     let r = &out.report;
     ui.detail(format!(
-        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; screened Poisson depth {}; points per round {:?}; {} spheres without a point",
-        r.samples, r.negative, r.raster_resolution, r.empty_space_points, r.feasible_initial, r.spsr_depth, r.points_per_round, r.spheres_without_point
+        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; screened Poisson depth {}; points per round {:?}; {} spheres without a point, {} far spheres (constraints only)",
+        r.samples, r.negative, r.raster_resolution, r.empty_space_points, r.feasible_initial, r.spsr_depth, r.points_per_round, r.spheres_without_point, r.far_spheres
     ));
     for (stage, t) in &r.timings {
         ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));

@@ -189,15 +189,15 @@ pub fn resolve(s: &Sphere, x: DVec3, cands: &[Sphere]) -> DVec3 {
                 for j in 0..i {
                     match trilaterate(s, &cands[i], &cands[j]) {
                         Some(pts) => {
-                            let ok: Vec<DVec3> = pts
+                            if let Some(best) = pts
                                 .into_iter()
                                 .filter(|&y| in_unit_box(y) && free_of(y, &[i, j]))
-                                .collect();
-                            if let Some(best) = ok.into_iter().min_by(|a, b| {
-                                (*a - x)
-                                    .length_squared()
-                                    .total_cmp(&(*b - x).length_squared())
-                            }) {
+                                .min_by(|a, b| {
+                                    (*a - x)
+                                        .length_squared()
+                                        .total_cmp(&(*b - x).length_squared())
+                                })
+                            {
                                 found = Some(best);
                                 break 'pairs;
                             }

@@ -88,33 +88,92 @@ mod tests {
 /// Sentinel for an absent entry.
 pub(crate) const NONE: u32 = u32::MAX;
 
-/// Index of a sparse set of integer points: 8x8x8 bricks, found by hashing the brick's key, each
-/// a dense array of 512 slots. A lookup costs one hash probe into a table ~100 times smaller
-/// than the set (so it stays in cache) and one array read.
+/// Index of a sparse set of integer points: 8x8x8 bricks, each a dense array of 512 slots, found
+/// through a dense table of all bricks when the extent is small enough (at most
+/// [`DENSE_BRICKS`] bricks, 8 MB) and by hashing the brick's key otherwise. A lookup costs one
+/// table read (or one hash probe into a table ~100 times smaller than the set) and one array read.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct SparseIndex {
-    bricks: KeyMap<u32>,
+    bricks: Bricks,
     slots: Vec<u32>,
     extent: i64,
+}
+
+/// Where each brick's slots start, by brick.
+#[derive(Debug, Clone)]
+enum Bricks {
+    /// `table[bx + n (by + n bz)]`, `n` bricks per axis (`NONE` where empty).
+    Dense { table: Vec<u32>, n: usize },
+    /// By Morton key of the brick.
+    Hashed(KeyMap<u32>),
+}
+
+impl Default for Bricks {
+    fn default() -> Self {
+        Bricks::Hashed(KeyMap::default())
+    }
+}
+
+/// The largest brick count indexed by a dense table (2^21 bricks: extents up to 1024).
+const DENSE_BRICKS: usize = 1 << 21;
+
+impl Bricks {
+    fn new(extent: u32, hint: usize) -> Self {
+        let n = (extent as usize).div_ceil(8);
+        if n.saturating_mul(n).saturating_mul(n) <= DENSE_BRICKS {
+            Bricks::Dense {
+                table: vec![NONE; n * n * n],
+                n,
+            }
+        } else {
+            Bricks::Hashed(key_map(hint / 64 + 16))
+        }
+    }
+
+    /// The brick at brick coordinates `b` (each below the extent / 8).
+    #[inline]
+    fn get(&self, b: [u32; 3]) -> Option<u32> {
+        match self {
+            Bricks::Dense { table, n } => {
+                let id = table[b[0] as usize + n * (b[1] as usize + n * b[2] as usize)];
+                (id != NONE).then_some(id)
+            }
+            Bricks::Hashed(map) => map.get(&morton(b)).copied(),
+        }
+    }
+
+    /// The brick at `b`, made `next` if it has none yet.
+    fn get_or_insert(&mut self, b: [u32; 3], next: u32) -> u32 {
+        match self {
+            Bricks::Dense { table, n } => {
+                let e = &mut table[b[0] as usize + *n * (b[1] as usize + *n * b[2] as usize)];
+                if *e == NONE {
+                    *e = next;
+                }
+                *e
+            }
+            Bricks::Hashed(map) => *map.entry(morton(b)).or_insert(next),
+        }
+    }
 }
 
 impl SparseIndex {
     /// Index points `coords[i] -> i`; coordinates must be below `extent`.
     pub(crate) fn new(coords: impl Iterator<Item = [u32; 3]>, extent: u32, hint: usize) -> Self {
-        let mut bricks: KeyMap<u32> = key_map(hint / 64 + 16);
+        let mut bricks = Bricks::new(extent, hint);
         let mut slots: Vec<u32> = Vec::new();
-        let mut last = (u64::MAX, 0u32);
+        let mut last = ([u32::MAX; 3], 0u32);
         for (i, c) in coords.enumerate() {
-            let key = morton([c[0] >> 3, c[1] >> 3, c[2] >> 3]);
-            let b = if key == last.0 {
+            let bc = [c[0] >> 3, c[1] >> 3, c[2] >> 3];
+            let b = if bc == last.0 {
                 last.1
             } else {
                 let next = (slots.len() / 512) as u32;
-                let b = *bricks.entry(key).or_insert(next);
+                let b = bricks.get_or_insert(bc, next);
                 if b == next {
                     slots.resize(slots.len() + 512, NONE);
                 }
-                last = (key, b);
+                last = (bc, b);
                 b
             };
             slots[b as usize * 512 + slot(c)] = i as u32;
@@ -133,9 +192,7 @@ impl SparseIndex {
             return None;
         }
         let c = [c[0] as u32, c[1] as u32, c[2] as u32];
-        let b = *self
-            .bricks
-            .get(&morton([c[0] >> 3, c[1] >> 3, c[2] >> 3]))?;
+        let b = self.bricks.get([c[0] >> 3, c[1] >> 3, c[2] >> 3])?;
         let s = self.slots[b as usize * 512 + slot(c)];
         (s != NONE).then_some(s)
     }
@@ -160,6 +217,7 @@ impl SparseIndex {
                 local[a][k] = q.rem_euclid(8) as usize;
             }
         }
+        let bricks_per_axis = (self.extent + 7) / 8;
         let mut ids = [[[NONE; 2]; 2]; 2];
         for z in 0..2 {
             for y in 0..2 {
@@ -169,11 +227,10 @@ impl SparseIndex {
                         first[1] + y as i64,
                         first[2] + z as i64,
                     ];
-                    if b.iter().all(|&v| v >= 0) {
-                        let key = morton([b[0] as u32, b[1] as u32, b[2] as u32]);
-                        if let Some(&id) = self.bricks.get(&key) {
-                            ids[z][y][x] = id;
-                        }
+                    if b.iter().all(|&v| v >= 0 && v < bricks_per_axis)
+                        && let Some(id) = self.bricks.get([b[0] as u32, b[1] as u32, b[2] as u32])
+                    {
+                        ids[z][y][x] = id;
                     }
                 }
             }

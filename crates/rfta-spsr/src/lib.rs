@@ -19,8 +19,7 @@
 //!
 //! # Example
 //! ```
-//! use rfta_geom::{OrientedPoints, glam::DVec3};
-//! use rfta_spsr::{SpsrParams, reconstruct};
+//! use rfta_spsr::{OrientedPoints, SpsrParams, glam::DVec3, reconstruct};
 //!
 //! // 4,000 points on the unit sphere (a Fibonacci spiral), normals pointing out.
 //! let n = 4000;
@@ -52,7 +51,8 @@ mod tree;
 
 use std::time::{Duration, Instant};
 
-use rfta_geom::{OrientedPoints, TriMesh};
+/// The types of this crate's API, so that depending on `rfta-spsr` alone is enough.
+pub use rfta_geom::{OrientedPoints, TriMesh, glam};
 
 /// Errors of the reconstruction. Each says what is wrong with the input or the parameters.
 #[derive(Debug, thiserror::Error)]

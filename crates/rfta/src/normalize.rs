@@ -3,6 +3,8 @@
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, Sphere};
 
+use crate::Params;
+
 /// The samples moved into the unit box as the reference does (subtract the per-axis minimum,
 /// divide by the largest extent), as spheres of radius `|s|` capped at the clamp.
 pub(crate) struct UnitBox {
@@ -55,9 +57,36 @@ impl UnitBox {
         self.spheres.len()
     }
 
+    /// A point of the samples' coordinates in the unit box.
+    pub(crate) fn to_unit(&self, p: DVec3) -> DVec3 {
+        (p - self.trans) / self.scale
+    }
+
     /// A unit-box point back in the samples' coordinates.
     pub(crate) fn to_input(&self, p: DVec3) -> DVec3 {
         p * self.scale + self.trans
+    }
+
+    /// Spheres at least this large own no tangency point (unit box): the clamp, or
+    /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
+    pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
+        let band = params
+            .owner_band
+            .map_or(f64::INFINITY, |k| k * self.spacing());
+        self.clamp.min(band)
+    }
+
+    /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
+    /// clamped ones).
+    pub(crate) fn far_spheres(&self, params: &Params) -> usize {
+        let r = self.owner_radius(params);
+        if r >= self.clamp {
+            return 0;
+        }
+        self.spheres
+            .iter()
+            .filter(|s| s.radius >= r && s.radius < self.clamp)
+            .count()
     }
 
     /// The sample spacing in the unit box.

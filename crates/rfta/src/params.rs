@@ -60,6 +60,12 @@ pub struct Params {
     /// fraction of the sample spacing counts as touched and keeps its points; only the spheres the
     /// mesh cuts or misses by more are fine-tuned (0: the reference's `tolerance` in every round).
     pub keep_band: f64,
+    /// Spheres farther from the surface than this many sample spacings (`|s| >= owner_band h`)
+    /// own no tangency point; they stay constraints, in the rasterization and in every
+    /// feasibility test. Their points only repeat what the spheres nearer the surface say, at the
+    /// cost of most of the work on fine grids. `None`: every sphere owns points, as in the
+    /// reference.
+    pub owner_band: Option<f64>,
     /// Connected components whose bounding-box diagonal is below this fraction of the sample
     /// spacing are removed (0 keeps everything). Screened Poisson leaves small closed islands next
     /// to outlying tangency points (the reference's outputs have them too); a part that small
@@ -87,6 +93,7 @@ impl Default for Params {
             gpu: false,
             threads: None,
             keep_band: 0.0,
+            owner_band: None,
             min_island: 0.5,
         }
     }
@@ -145,7 +152,8 @@ impl Params {
             .unwrap_or_else(|| rfta_raster::default_resolution(n))
     }
 
-    /// The tangency-point settings for `n` samples whose spheres are capped at `clamp` (unit box).
+    /// The tangency-point settings for `n` samples, where spheres of radius `clamp` and larger
+    /// own no point (unit box; clamped or beyond [`Params::owner_band`]).
     pub fn feasible_params(&self, n: usize, clamp: f64) -> rfta_feasible::Params {
         rfta_feasible::Params {
             tol: self.tolerance,
@@ -222,6 +230,11 @@ impl Params {
                 "keep_band must be finite and >= 0, got {}",
                 self.keep_band
             ));
+        }
+        if let Some(b) = self.owner_band
+            && !(b > 0.0 && b.is_finite())
+        {
+            return bad(format!("owner_band must be finite and > 0, got {b}"));
         }
         if let Some(d) = self.spsr_depth
             && !(1..=16).contains(&d)

@@ -86,9 +86,15 @@ pub struct Report {
     pub points_per_round: Vec<usize>,
     /// Spheres without a tangency point at the end (clamped and zero-radius ones included).
     pub spheres_without_point: usize,
-    /// Small closed islands removed from the final mesh (see [`Params::min_island`]).
+    /// Spheres farther than [`crate::Params::owner_band`] from the surface: constraints that own
+    /// no point (not counted in `spheres_without_point`).
+    pub far_spheres: usize,
+    /// Small closed islands removed from the final mesh (see [`crate::Params::min_island`]).
     pub islands_removed: usize,
-    /// Why fine-tuning stopped before `k_max` rounds, if it did.
+    /// Components removed from the final mesh because every vertex of theirs lies inside a
+    /// sample sphere (by more than the tolerance), where the samples say no surface is.
+    pub enclosed_removed: usize,
+    /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
     pub stopped_early: Option<String>,
     /// Samples that overlap a sample of the other sign (see [`check`]; 0 when not checked).
     pub inconsistent_samples: usize,

@@ -27,7 +27,7 @@ impl Rounds {
         Self {
             cloud,
             spsr: params.spsr_params(Some(unit.spacing())),
-            feasible: params.feasible_params(unit.len(), unit.clamp),
+            feasible: params.feasible_params(unit.len(), unit.owner_radius(params)),
         }
     }
 
@@ -61,6 +61,10 @@ impl Rounds {
                     break;
                 }
             };
+            report
+                .timings
+                .push((format!("round {round}: screened Poisson"), t.elapsed()));
+            let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
             // tested against this same set last round.
             let cloud_feasible = round > 1 && params.batch_holds_all(n);
@@ -82,7 +86,7 @@ impl Rounds {
             });
             report
                 .timings
-                .push((format!("fine-tuning round {round}"), t.elapsed()));
+                .push((format!("round {round}: fine-tuning"), t.elapsed()));
             if next.len() < 3 {
                 report.stopped_early = Some(format!(
                     "round {round}: only {} feasible points remained",

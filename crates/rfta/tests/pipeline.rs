@@ -267,3 +267,53 @@ fn degenerate_and_random_small_inputs_never_panic() {
         }
     }
 }
+
+/// Spheres beyond the owner band own no point, are counted as far, raise no warning, and the
+/// surface stays within a fraction of the spacing of the true torus.
+#[test]
+fn spheres_beyond_the_owner_band_own_no_point_and_stay_constraints() {
+    let torus = Analytic::Torus {
+        major: 0.55,
+        minor: 0.25,
+    };
+    let samples = grid_samples(torus, 16);
+    let h = 2.0 / 16.0;
+    let band = 2.0;
+    let out = reconstruct(
+        &samples,
+        &Params {
+            rounds: 2,
+            owner_band: Some(band),
+            ..Params::default()
+        },
+    )
+    .expect("torus");
+    // Brute force: the spheres at or beyond `band` spacings (values in the samples' units).
+    let far: Vec<usize> = (0..samples.len())
+        .filter(|&i| samples.values()[i].abs() >= band * h * (1.0 - 1e-12))
+        .collect();
+    assert!(far.len() > samples.len() / 2, "{} far", far.len());
+    let r = &out.report;
+    // The unit box scales lengths by 1/2 here, so the test's threshold matches within rounding.
+    assert!(
+        r.far_spheres.abs_diff(far.len()) <= 2,
+        "{} vs {}",
+        r.far_spheres,
+        far.len()
+    );
+    for &o in &out.points.owners {
+        assert!(
+            samples.values()[o as usize].abs() < band * h * (1.0 + 1e-12),
+            "sample {o}"
+        );
+    }
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    assert!(r.mesh.watertight && r.mesh.components == 1);
+    let worst = out
+        .mesh
+        .vertices
+        .iter()
+        .map(|&v| torus.sdf(v).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 0.5 * h, "max vertex distance {worst}, spacing {h}");
+}

@@ -3,11 +3,12 @@
 //!
 //! ```text
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
-//!                  [--samples N] [--depth D] [--quick] [--out DIR]
+//!                  [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]
 //! ```
 //!
 //! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
-//! depth matched to the sample spacing (the depth table of docs/speed.md).
+//! depth matched to the sample spacing, and `--owner-band K` gives points to the spheres within
+//! `K` sample spacings of the surface (0: to all, as the reference): the tables of docs/speed.md.
 //!
 //! `--inputs DIR` takes prepared inputs (`NAME/gt.obj`, `NAME/sdf_n{N}.npy`) as they are; a
 //! missing grid is sampled from `gt.obj`. `--meshes DIR` takes raw meshes, normalises each (box
@@ -52,13 +53,22 @@ pub(crate) struct Row {
     pub(crate) status: String,
 }
 
+/// Overrides of the rfta methods' parameters, for the tables of docs/speed.md.
+#[derive(Debug, Default)]
+struct Tuning {
+    /// `--depth D`: screened Poisson depth.
+    depth: Option<u32>,
+    /// `--owner-band K`: sample spacings within which spheres own points (0: all).
+    owner_band: Option<f64>,
+}
+
 struct Args {
     inputs: Option<PathBuf>,
     meshes: Option<PathBuf>,
     res: Vec<usize>,
     methods: Vec<String>,
     samples: usize,
-    depth: Option<u32>,
+    tuning: Tuning,
     quick: bool,
     out: Option<PathBuf>,
 }
@@ -72,7 +82,7 @@ fn parse(args: &[String]) -> Result<Args> {
         res: vec![10, 20, 30],
         methods: METHODS.iter().map(|m| m.to_string()).collect(),
         samples: 1_000_000,
-        depth: None,
+        tuning: Tuning::default(),
         quick: false,
         out: None,
     };
@@ -97,10 +107,17 @@ fn parse(args: &[String]) -> Result<Args> {
             }
             "--samples" => a.samples = value()?.parse().context("--samples takes a number")?,
             "--depth" => {
-                a.depth = Some(
+                a.tuning.depth = Some(
                     value()?
                         .parse()
                         .context("--depth takes a number (1 to 16)")?,
+                )
+            }
+            "--owner-band" => {
+                a.tuning.owner_band = Some(
+                    value()?
+                        .parse()
+                        .context("--owner-band takes a number of spacings (0: every sphere)")?,
                 )
             }
             "--quick" => a.quick = true,
@@ -195,7 +212,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                 bar.set_message(format!("{} n={n} {method}", shape.name));
                 let t = Instant::now();
                 let cpu = crate::bench::process_usage().0;
-                let result = run_method(method, &grid, &values, a.depth);
+                let result = run_method(method, &grid, &values, &a.tuning);
                 let seconds = t.elapsed().as_secs_f64();
                 let cpu_seconds = crate::bench::process_usage().0 - cpu;
                 let row = match result {
@@ -301,19 +318,24 @@ fn run_method(
     method: &str,
     grid: &Grid,
     values: &[f64],
-    depth: Option<u32>,
+    tuning: &Tuning,
 ) -> Result<TriMesh, String> {
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
         "rfta" | "rfta-default" | "rfta-paper" => {
             // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults.
+            let base = match method {
+                "rfta" => rfta::Params::fast(),
+                "rfta-default" => rfta::Params::default(),
+                _ => rfta::Params::paper_table(),
+            };
             let params = rfta::Params {
-                spsr_depth: depth,
-                ..match method {
-                    "rfta" => rfta::Params::fast(),
-                    "rfta-default" => rfta::Params::default(),
-                    _ => rfta::Params::paper_table(),
-                }
+                spsr_depth: tuning.depth.or(base.spsr_depth),
+                owner_band: match tuning.owner_band {
+                    Some(b) => (b > 0.0).then_some(b),
+                    None => base.owner_band,
+                },
+                ..base
             };
             let samples =
                 rfta_geom::SdfSamples::grid(*grid, values.to_vec()).map_err(|e| e.to_string())?;
