@@ -179,6 +179,12 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
             r.islands_removed
         ));
     }
+    if r.unsupported_removed > 0 {
+        ui.detail(format!(
+            "removed {} component(s) the samples contradict (inside sample spheres, or enclosing no sample of their inside)",
+            r.unsupported_removed
+        ));
+    }
     if let Some(why) = &r.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));
     }

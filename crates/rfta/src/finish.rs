@@ -1,11 +1,12 @@
 //! Step 6: the final solve, the mesh back in the samples' coordinates, small islands removed, the
 //! mesh checked and what the caller should know put in the report.
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use rfta_feasible::TangentPoints;
-use rfta_geom::TriMesh;
-use rfta_geom::glam::DVec3;
+use rfta_geom::kernels::solid_angle;
+use rfta_geom::{Aabb, TriMesh};
 use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
@@ -34,19 +35,13 @@ pub(crate) fn finish(
     report.far_spheres = unit.far_spheres(params);
     report.spheres_without_point = n.saturating_sub(owners.len() + report.far_spheres);
     mesh.map_vertices(|v| unit.to_input(v));
-    // Components that lie entirely inside sample spheres contradict the samples (the surface may
-    // not enter a sphere): removed with the small ones. The tree is built only if needed.
-    let all = std::sync::OnceLock::new();
-    let tol = params.tolerance;
-    let enclosed = |v: DVec3| {
-        all.get_or_init(|| SphereTree::new(&unit.spheres))
-            .inside_any(unit.to_unit(v), -tol, None)
-    };
-    let (kept, small, inside) =
-        remove_islands(&mesh, params.min_island * unit.input_spacing, enclosed);
+    let tree = OnceLock::new();
+    let (kept, removed) = remove_islands(&mesh, |faces, bounds| {
+        judge(unit, params, &tree, &mesh, faces, bounds)
+    });
     mesh = kept;
-    report.islands_removed = small;
-    report.enclosed_removed = inside;
+    report.islands_removed = removed[Island::Small as usize];
+    report.unsupported_removed = removed[Island::Unsupported as usize];
     report.mesh = check::mesh(&mesh)?;
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
@@ -81,19 +76,81 @@ pub(crate) fn finish(
     })
 }
 
-/// Removes connected components (by shared vertices) whose bounding-box diagonal is below
-/// `min_diagonal`, and those whose every vertex `enclosed` says lies inside a sample sphere,
-/// unless that would remove everything; unused vertices are dropped. Returns the mesh and the
-/// numbers of small and of enclosed components removed.
+/// Why a component of the mesh goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Island {
+    /// Its bounding-box diagonal is below [`Params::min_island`] spacings.
+    Small,
+    /// The samples contradict it: every vertex lies inside a sample sphere, or it is at most
+    /// [`UNSUPPORTED_BELOW`] spacings across and encloses no sample of the sign its orientation
+    /// gives its inside.
+    Unsupported,
+}
+
+/// Components at most this many sample spacings across must enclose a sample to stay.
+const UNSUPPORTED_BELOW: f64 = 2.0;
+
+/// The verdict on one component (`faces` of `mesh`, in the samples' coordinates, within
+/// `bounds`); `tree` holds every sample sphere, built on first use.
+fn judge(
+    unit: &UnitBox,
+    params: &Params,
+    tree: &OnceLock<SphereTree>,
+    mesh: &TriMesh,
+    faces: &[usize],
+    bounds: Aabb,
+) -> Option<Island> {
+    use rayon::prelude::*;
+    let h = unit.input_spacing;
+    let diag = (bounds.max - bounds.min).length();
+    if diag < params.min_island * h {
+        return Some(Island::Small);
+    }
+    // The surface may not enter a sample sphere: a component inside them is not there.
+    let mut vertices: Vec<u32> = faces.iter().flat_map(|&f| mesh.faces[f]).collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    let tree = tree.get_or_init(|| SphereTree::new(&unit.spheres));
+    let tol = params.tolerance;
+    if vertices
+        .par_iter()
+        .all(|&v| tree.inside_any(unit.to_unit(mesh.vertices[v as usize]), -tol, None))
+    {
+        return Some(Island::Unsupported);
+    }
+    // A small closed component stands for a solid (outward) or a cavity (inward): some sample
+    // inside it must say so.
+    if diag < UNSUPPORTED_BELOW * h {
+        let supported = (0..unit.len()).any(|i| {
+            let p = unit.to_input(unit.centers[i]);
+            if !bounds.contains(p) {
+                return false;
+            }
+            let w: f64 = faces
+                .iter()
+                .map(|&f| {
+                    let [a, b, c] = mesh.faces[f].map(|v| mesh.vertices[v as usize]);
+                    solid_angle(p, a, b, c)
+                })
+                .sum::<f64>()
+                / (4.0 * std::f64::consts::PI);
+            let v = unit.values[i];
+            (w > 0.5 && v < 0.0) || (w < -0.5 && v > 0.0)
+        });
+        if !supported {
+            return Some(Island::Unsupported);
+        }
+    }
+    None
+}
+
+/// Removes the connected components (by shared vertices) other than the largest (by faces) that
+/// `verdict` condemns, given their faces and bounding box; unused vertices are dropped. Returns
+/// the mesh and the number removed for each [`Island`] reason.
 fn remove_islands(
     mesh: &TriMesh,
-    min_diagonal: f64,
-    enclosed: impl Fn(DVec3) -> bool + Sync,
-) -> (TriMesh, usize, usize) {
-    use rayon::prelude::*;
-    if mesh.faces.is_empty() {
-        return (mesh.clone(), 0, 0);
-    }
+    verdict: impl Fn(&[usize], Aabb) -> Option<Island>,
+) -> (TriMesh, [usize; 2]) {
     let n = mesh.vertices.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();
     fn root(p: &mut [u32], mut x: u32) -> u32 {
@@ -112,64 +169,52 @@ fn remove_islands(
             }
         }
     }
-    let mut lo = vec![DVec3::splat(f64::INFINITY); n];
-    let mut hi = vec![DVec3::splat(f64::NEG_INFINITY); n];
-    for f in &mesh.faces {
-        let r = root(&mut parent, f[0]) as usize;
-        for &v in f {
-            lo[r] = lo[r].min(mesh.vertices[v as usize]);
-            hi[r] = hi[r].max(mesh.vertices[v as usize]);
-        }
-    }
     let roots: Vec<u32> = mesh.faces.iter().map(|f| root(&mut parent, f[0])).collect();
-    let used: Vec<u32> = {
-        let mut u: Vec<u32> = mesh.faces.iter().flatten().copied().collect();
-        u.sort_unstable();
-        u.dedup();
-        u
-    };
-    // A component is outside every sphere somewhere unless all its vertices are enclosed. The
-    // largest component (by faces) is the surface the samples describe: not tested.
-    let mut faces_of = vec![0usize; n];
-    for &r in &roots {
-        faces_of[r as usize] += 1;
-    }
-    let largest = (0..n)
-        .max_by_key(|&r| (faces_of[r], std::cmp::Reverse(r)))
-        .unwrap_or(0);
-    let mut seen_outside = vec![false; n];
-    seen_outside[largest] = true;
-    let tested: Vec<(u32, u32)> = used
-        .iter()
-        .map(|&v| (v, root(&mut parent, v)))
-        .filter(|&(_, r)| r as usize != largest)
-        .collect();
-    let outside: Vec<bool> = tested
-        .par_iter()
-        .map(|&(v, _)| !enclosed(mesh.vertices[v as usize]))
-        .collect();
-    for (&(_, r), &o) in tested.iter().zip(&outside) {
-        if o {
-            seen_outside[r as usize] = true;
+    // Faces and bounds per component, components in order of their first face.
+    let mut component_of = vec![u32::MAX; n];
+    let mut faces_of: Vec<Vec<usize>> = Vec::new();
+    let mut bounds: Vec<Aabb> = Vec::new();
+    for (f, &r) in roots.iter().enumerate() {
+        if component_of[r as usize] == u32::MAX {
+            component_of[r as usize] = faces_of.len() as u32;
+            faces_of.push(Vec::new());
+            bounds.push(Aabb::EMPTY);
+        }
+        let c = component_of[r as usize] as usize;
+        faces_of[c].push(f);
+        for &v in &mesh.faces[f] {
+            bounds[c] = bounds[c].grow(mesh.vertices[v as usize]);
         }
     }
-    let small = |r: u32| (hi[r as usize] - lo[r as usize]).length() < min_diagonal;
-    let keep_root = |r: u32| !small(r) && seen_outside[r as usize];
-    if !roots.iter().any(|&r| keep_root(r)) {
-        return (mesh.clone(), 0, 0);
+    let mut removed = [0usize; 2];
+    if faces_of.len() < 2 {
+        return (mesh.clone(), removed);
     }
-    let mut removed_roots: Vec<u32> = roots.iter().copied().filter(|&r| !keep_root(r)).collect();
-    removed_roots.sort_unstable();
-    removed_roots.dedup();
-    if removed_roots.is_empty() {
-        return (mesh.clone(), 0, 0);
+    let largest = (0..faces_of.len())
+        .max_by_key(|&c| (faces_of[c].len(), std::cmp::Reverse(c)))
+        .unwrap_or(0);
+    let keep: Vec<bool> = (0..faces_of.len())
+        .map(|c| {
+            if c == largest {
+                return true;
+            }
+            match verdict(&faces_of[c], bounds[c]) {
+                Some(why) => {
+                    removed[why as usize] += 1;
+                    false
+                }
+                None => true,
+            }
+        })
+        .collect();
+    if keep.iter().all(|&k| k) {
+        return (mesh.clone(), removed);
     }
-    let removed_small = removed_roots.iter().filter(|&&r| small(r)).count();
     let mut remap = vec![u32::MAX; n];
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
     for (f, &r) in mesh.faces.iter().zip(&roots) {
-        if !keep_root(r) {
+        if !keep[component_of[r as usize] as usize] {
             continue;
         }
         let g = f.map(|v| {
@@ -181,16 +226,13 @@ fn remove_islands(
         });
         faces.push(g);
     }
-    (
-        TriMesh { vertices, faces },
-        removed_small,
-        removed_roots.len() - removed_small,
-    )
+    (TriMesh { vertices, faces }, removed)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rfta_geom::glam::DVec3;
     use rfta_geom::shapes;
 
     fn union(parts: &[TriMesh]) -> TriMesh {
@@ -211,23 +253,37 @@ mod tests {
     }
 
     #[test]
-    fn islands_go_by_size_and_by_lying_inside_sample_spheres() {
+    fn components_go_by_the_verdict_and_the_largest_always_stays() {
         let main = ball(DVec3::ZERO, 1.0);
         let small = ball(DVec3::new(3.0, 0.0, 0.0), 0.01);
-        let enclosed = ball(DVec3::new(0.0, 3.0, 0.0), 0.3);
+        let doomed = ball(DVec3::new(0.0, 3.0, 0.0), 0.3);
         let free = ball(DVec3::new(0.0, 0.0, 3.0), 0.3);
-        let mesh = union(&[main.clone(), small, enclosed, free.clone()]);
-        // A sample sphere of radius 0.5 around (0, 3, 0) holds the third ball entirely.
-        let inside = |v: DVec3| (v - DVec3::new(0.0, 3.0, 0.0)).length() < 0.5;
-        let (kept, n_small, n_inside) = remove_islands(&mesh, 0.1, inside);
-        assert_eq!((n_small, n_inside), (1, 1));
+        let mesh = union(&[main.clone(), small, doomed, free.clone()]);
+        let verdict = |_: &[usize], b: Aabb| {
+            if (b.max - b.min).length() < 0.1 {
+                Some(Island::Small)
+            } else if b.contains(DVec3::new(0.0, 3.0, 0.0)) {
+                Some(Island::Unsupported)
+            } else {
+                None
+            }
+        };
+        let (kept, removed) = remove_islands(&mesh, verdict);
+        assert_eq!(removed, [1, 1]);
         let expect = union(&[main, free]);
         assert_eq!(kept.faces.len(), expect.faces.len());
         assert_eq!(kept.vertices.len(), expect.vertices.len());
-        // The largest component is never tested, and nothing is removed when all would go.
-        let (all, _, _) = remove_islands(&ball(DVec3::ZERO, 0.01), 0.1, |_| true);
-        assert_eq!(all.faces.len(), ball(DVec3::ZERO, 0.01).faces.len());
-        let (empty, a, b) = remove_islands(&TriMesh::default(), 0.1, |_| true);
-        assert!(empty.faces.is_empty() && a == 0 && b == 0);
+        // What is left is the first and the last ball: near the origin or near (0, 0, 3).
+        assert!(
+            kept.vertices
+                .iter()
+                .all(|v| v.length() < 1.01 || (*v - DVec3::new(0.0, 0.0, 3.0)).length() < 0.31)
+        );
+        // The largest component is never judged; an empty mesh is returned as it is.
+        let tiny = ball(DVec3::ZERO, 0.01);
+        let (all, removed) = remove_islands(&tiny, |_, _| Some(Island::Small));
+        assert!(all == tiny && removed == [0, 0]);
+        let (empty, removed) = remove_islands(&TriMesh::default(), |_, _| Some(Island::Small));
+        assert!(empty.faces.is_empty() && removed == [0, 0]);
     }
 }

@@ -91,9 +91,10 @@ pub struct Report {
     pub far_spheres: usize,
     /// Small closed islands removed from the final mesh (see [`crate::Params::min_island`]).
     pub islands_removed: usize,
-    /// Components removed from the final mesh because every vertex of theirs lies inside a
-    /// sample sphere (by more than the tolerance), where the samples say no surface is.
-    pub enclosed_removed: usize,
+    /// Components removed from the final mesh because the samples contradict them: every vertex
+    /// lies inside a sample sphere (by more than the tolerance), or, at most 2 spacings across,
+    /// they enclose no sample of the sign their orientation gives their inside.
+    pub unsupported_removed: usize,
     /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
     pub stopped_early: Option<String>,
     /// Samples that overlap a sample of the other sign (see [`check`]; 0 when not checked).
