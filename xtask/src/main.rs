@@ -39,7 +39,7 @@ commands:
             side by side (PoissonRecon needs `cargo bench-spsr`, i.e. --features poissonrecon)
   bench     e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny] [--out DIR]:
             rfta (default, fast), marching cubes and gpytoolbox on the same grids, wall/CPU/memory/
-            Chamfer and ratios (release build: `cargo bench-e2e`)
+            Chamfer and ratios (release build: `cargo bench-e2e`); --from-csv FILE prints the tables again
 ";
 
 fn main() -> Result<()> {

@@ -98,6 +98,9 @@ pub(crate) struct Tuning {
     /// (they stay constraints); 0 gives every sphere points, as the reference.
     #[arg(long, value_name = "SPACINGS")]
     owner_band: Option<f64>,
+    /// Cells per axis of the empty-space rasterization (default: the paper's 64 ceil(n^(1/3) / 16)).
+    #[arg(long, value_name = "CELLS", value_parser = clap::value_parser!(u32).range(8..=1024))]
+    raster_res: Option<u32>,
     /// Octree depth of the screened Poisson solves (default: matched to the sample spacing,
     /// 4 finest cells per spacing; the reference always uses 10).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
@@ -126,6 +129,9 @@ impl Tuning {
         }
         if self.depth.is_some() {
             p.spsr_depth = self.depth;
+        }
+        if let Some(r) = self.raster_res {
+            p.raster_resolution = Some(r as usize);
         }
         if let Some(b) = self.owner_band {
             p.owner_band = (b > 0.0).then_some(b);

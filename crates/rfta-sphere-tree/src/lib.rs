@@ -13,10 +13,13 @@
 //! holds `x` (the reference's) then visits a large part of the tree per query, which is what makes
 //! the method quadratic without batching. This tree keeps, per node, the box of the sphere
 //! *centres* and the largest radius, which bounds the signed distance of every sphere below it:
-//! `|x - p_j| - r_j >= dist(x, centre box) - max radius`. The bound is Euclidean (tighter than a
-//! box test at corners), visits children nearest-first, and stops as soon as the answer is known:
-//! at the first containing sphere for `inside_any`, and once `k` spheres deeper than any remaining
-//! bound are found for `spheres_containing`. `cargo bench -p rfta-sphere-tree` measures the gain.
+//! `|x - p_j| - r_j >= dist(x, centre box) - max radius`, and the signed distance from `x` to the
+//! union of the spheres' boxes bounds it too (the larger is used). The bound is Euclidean (tighter
+//! than a box test at corners), visits children nearest-first, and stops as soon as the answer is
+//! known: at the first containing sphere for `inside_any`, and once `k` spheres deeper than any
+//! remaining bound are found for `spheres_containing`. [`SphereTree::spheres_within_into`] lists
+//! every sphere within a threshold, for callers that test many nearby points.
+//! `cargo bench -p rfta-sphere-tree` measures the gain.
 //!
 //! obvhs builds the hierarchy; it never appears in this crate's API. All tests are exact in `f64`.
 //!

@@ -97,9 +97,9 @@ pub struct Report {
     pub unsupported_removed: usize,
     /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
     pub stopped_early: Option<String>,
-    /// Samples that overlap a sample of the other sign (see [`check`]; 0 when not checked).
+    /// Samples that overlap a sample of the other sign (see [`crate::check`]; 0 when not checked).
     pub inconsistent_samples: usize,
-    /// The clamp used: [`Params::clamp`], or the one [`Params::check`] detected.
+    /// The clamp used: [`crate::Params::clamp`], or the one [`crate::Params::check`] detected.
     pub clamp: Option<f64>,
     /// What the output mesh is like (checked before it is returned).
     pub mesh: MeshCheck,

@@ -3,6 +3,7 @@
 //! ```text
 //! cargo bench-e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny]
 //!                 [--out DIR]
+//! cargo bench-e2e --from-csv target/bench/e2e.csv     # the tables again, from a run's rows
 //! ```
 //!
 //! On the dev shapes' prepared grids (`../shared/data/inputs/NAME/sdf_n{N}.npy`, N from `--res`)
@@ -50,6 +51,7 @@ struct Run {
 }
 
 struct Args {
+    from_csv: Option<PathBuf>,
     quick: bool,
     python: Option<String>,
     res: Vec<usize>,
@@ -60,6 +62,7 @@ struct Args {
 
 fn parse(root: &Path, args: &[String]) -> Result<Args> {
     let mut a = Args {
+        from_csv: None,
         quick: false,
         python: None,
         res: vec![20, 30],
@@ -82,6 +85,7 @@ fn parse(root: &Path, args: &[String]) -> Result<Args> {
         let mut value = || it.next().with_context(|| format!("{flag} needs a value"));
         match flag.as_str() {
             "--quick" => a.quick = true,
+            "--from-csv" => a.from_csv = Some(PathBuf::from(value()?)),
             "--python" => a.python = Some(value()?.clone()),
             "--res" => a.res = list(value()?)?,
             "--large" => a.large = list(value()?)?,
@@ -100,6 +104,19 @@ fn parse(root: &Path, args: &[String]) -> Result<Args> {
 /// Entry: `bench e2e ...` (`args` after `e2e`).
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     let a = parse(root, args)?;
+    if let Some(csv) = &a.from_csv {
+        let (rows, inputs) = read_csv(csv)?;
+        let methods = [
+            ("rfta", 2),
+            ("rfta-fast", 2),
+            ("mc", 1),
+            ("rfta", 1),
+            ("gpytoolbox", 1),
+        ];
+        let report = report(&rows, &inputs, &methods)?;
+        println!("{report}");
+        return Ok(());
+    }
     let data = std::env::var_os("RFTA_DATA_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("../shared/data"));
@@ -202,7 +219,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                     );
                     writeln!(
                         csv,
-                        "{},{},{method},{threads},{:.3},{:.3},{:.0},{:.6},{},{},ok",
+                        "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok",
                         input.shape,
                         input.n,
                         r.wall,
@@ -232,11 +249,50 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     }
     methods.push(("rfta", 1));
     methods.push(("gpytoolbox", 1));
+    let inputs: Vec<(String, usize)> = inputs.iter().map(|i| (i.shape.clone(), i.n)).collect();
     let report = report(&rows, &inputs, &methods)?;
     std::fs::write(a.out.join("e2e.csv"), csv)?;
     std::fs::write(a.out.join("e2e.md"), &report)?;
     println!("\n{report}\nwrote {}", a.out.join("e2e.md").display());
     Ok(())
+}
+
+/// The rows and inputs of an `e2e.csv` this command wrote.
+#[allow(clippy::type_complexity)]
+fn read_csv(
+    path: &Path,
+) -> Result<(
+    Vec<(String, usize, String, usize, Result<Run>)>,
+    Vec<(String, usize)>,
+)> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let mut rows = Vec::new();
+    let mut inputs: Vec<(String, usize)> = Vec::new();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < 11 {
+            bail!("{}: short row '{line}'", path.display());
+        }
+        let num = |i: usize| f[i].parse::<f64>().unwrap_or(f64::NAN);
+        let (shape, n) = (f[0].to_string(), f[1].parse::<usize>()?);
+        if !inputs.contains(&(shape.clone(), n)) {
+            inputs.push((shape.clone(), n));
+        }
+        let run = if f[10] == "ok" {
+            Ok(Run {
+                wall: num(4),
+                cpu: num(5),
+                rss_mb: num(6),
+                chamfer: num(7),
+                faces: f[8].parse().unwrap_or(0),
+                watertight: f[9] == "true",
+            })
+        } else {
+            Err(anyhow::anyhow!("{}", f[10]))
+        };
+        rows.push((shape, n, f[2].to_string(), f[3].parse()?, run));
+    }
+    Ok((rows, inputs))
 }
 
 fn name_of(dir: &Path) -> String {
@@ -249,16 +305,16 @@ fn name_of(dir: &Path) -> String {
 /// ratios; then every row.
 fn report(
     rows: &[(String, usize, String, usize, Result<Run>)],
-    inputs: &[Input],
+    inputs: &[(String, usize)],
     methods: &[(&str, usize)],
 ) -> Result<String> {
     let mut s = String::new();
     writeln!(
         s,
-        "| N | shapes | method | threads | wall s | CPU s | peak MB | Chamfer | gpytoolbox CPU / this | this CPU / mc |"
+        "| N | shapes | method | threads | wall s | CPU s | peak MB | Chamfer | gpytoolbox CPU / this | this wall / mc wall |"
     )?;
     writeln!(s, "|{}", "---|".repeat(10))?;
-    let mut ns: Vec<usize> = inputs.iter().map(|i| i.n).collect();
+    let mut ns: Vec<usize> = inputs.iter().map(|i| i.1).collect();
     ns.dedup();
     for &n in &ns {
         let find = |shape: &str, m: &str, t: usize| {
@@ -270,8 +326,8 @@ fn report(
         };
         let shapes: Vec<&str> = inputs
             .iter()
-            .filter(|i| i.n == n)
-            .map(|i| i.shape.as_str())
+            .filter(|i| i.1 == n)
+            .map(|i| i.0.as_str())
             .collect();
         for &(m, t) in methods {
             // Shapes this method and marching cubes both finished (gpytoolbox too, when it ran).
@@ -295,14 +351,14 @@ fn report(
                 .iter()
                 .filter_map(|sh| find(sh, "gpytoolbox", 1).map(|r| r.cpu))
                 .collect();
-            let vs_gpy = if gpy.len() == ok.len() && m != "gpytoolbox" {
+            let vs_gpy = if gpy.len() == ok.len() && m != "gpytoolbox" && m != "mc" && cpu > 0.0 {
                 format!("{:.1}", gpy.iter().sum::<f64>() / ok.len() as f64 / cpu)
             } else {
                 "-".into()
             };
-            let mc = mean(&|r| r.cpu, "mc", 1);
+            let mc = mean(&|r| r.wall, "mc", 1);
             let vs_mc = if m != "mc" && mc > 0.0 {
-                format!("{:.0}", cpu / mc)
+                format!("{:.0}", mean(&|r| r.wall, m, t) / mc)
             } else {
                 "-".into()
             };
@@ -322,7 +378,7 @@ fn report(
     }
     writeln!(
         s,
-        "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (marching cubes: 10 ms resolution).\n"
+        "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (10 ms resolution: marching cubes shows 0).\n"
     )?;
     writeln!(
         s,

@@ -14,7 +14,8 @@ use anyhow::{Result, bail};
 
 const USAGE: &str =
     "usage: cargo xtask bench spsr [--quick] [--points N] [--depths 8,10] [--out DIR]
-       cargo xtask bench e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--out DIR]";
+       cargo xtask bench e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--out DIR]
+       cargo xtask bench e2e --from-csv FILE";
 
 /// Entry: `bench spsr ...` or `bench e2e ...`.
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {

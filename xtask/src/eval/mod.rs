@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
-//!                  [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]
+//!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
+//!                  [--out DIR]
 //! ```
 //!
 //! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
@@ -60,6 +61,8 @@ struct Tuning {
     depth: Option<u32>,
     /// `--owner-band K`: sample spacings within which spheres own points (0: all).
     owner_band: Option<f64>,
+    /// `--raster-res R`: cells per axis of the empty-space rasterization.
+    raster_res: Option<usize>,
 }
 
 struct Args {
@@ -112,6 +115,9 @@ fn parse(args: &[String]) -> Result<Args> {
                         .parse()
                         .context("--depth takes a number (1 to 16)")?,
                 )
+            }
+            "--raster-res" => {
+                a.tuning.raster_res = Some(value()?.parse().context("--raster-res takes a number")?)
             }
             "--owner-band" => {
                 a.tuning.owner_band = Some(
@@ -331,6 +337,7 @@ fn run_method(
             };
             let params = rfta::Params {
                 spsr_depth: tuning.depth.or(base.spsr_depth),
+                raster_resolution: tuning.raster_res.or(base.raster_resolution),
                 owner_band: match tuning.owner_band {
                     Some(b) => (b > 0.0).then_some(b),
                     None => base.owner_band,
