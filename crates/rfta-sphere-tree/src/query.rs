@@ -29,25 +29,15 @@ impl SphereTree {
     /// `threshold = -tol` asks "is `x` inside another sphere by more than `tol`" (the reference's
     /// feasibility test, `tol = 1e-4` in unit-box coordinates).
     pub fn inside_any(&self, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, lower_bound(&self.nodes[0], x)));
-        while let Some((idx, lb)) = stack.pop() {
-            if lb >= threshold {
-                continue;
+        let mut hit = false;
+        self.traverse(x, |visit| match visit {
+            Visit::Bound(lb) => lb < threshold,
+            Visit::Leaf(node) => {
+                hit = self.leaf_hit(node, x, threshold, ignore);
+                !hit
             }
-            let node = &self.nodes[idx as usize];
-            if node.leaf {
-                if self.leaf_hit(node, x, threshold, ignore) {
-                    return true;
-                }
-            } else {
-                push_ordered(&mut stack, &self.nodes, node, x);
-            }
-        }
-        false
+        });
+        hit
     }
 
     /// Up to `k` spheres `j != ignore` with `|x - p_j| - r_j < threshold`, deepest first (ties by
@@ -75,18 +65,13 @@ impl SphereTree {
         hits: &mut Vec<(f64, u32)>,
     ) {
         hits.clear();
-        if self.nodes.is_empty() || k == 0 {
+        if k == 0 {
             return;
         }
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, lower_bound(&self.nodes[0], x)));
-        while let Some((idx, lb)) = stack.pop() {
+        self.traverse(x, |visit| match visit {
             // Once k hits are held, only spheres at least as deep as the k-th can still enter.
-            if lb >= threshold || (hits.len() == k && lb > hits[k - 1].0) {
-                continue;
-            }
-            let node = &self.nodes[idx as usize];
-            if node.leaf {
+            Visit::Bound(lb) => lb < threshold && !(hits.len() == k && lb > hits[k - 1].0),
+            Visit::Leaf(node) => {
                 for s in node.a as usize..(node.a + node.b) as usize {
                     let id = self.ids[s];
                     if Some(id) == ignore {
@@ -104,10 +89,9 @@ impl SphereTree {
                     hits.insert(at, key);
                     hits.truncate(k);
                 }
-            } else {
-                push_ordered(&mut stack, &self.nodes, node, x);
+                true
             }
-        }
+        });
     }
 
     /// Every sphere `j != ignore` with `|x - p_j| - r_j < threshold`, into `out` in ascending
@@ -122,29 +106,20 @@ impl SphereTree {
         out: &mut Vec<u32>,
     ) {
         out.clear();
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, lower_bound(&self.nodes[0], x)));
-        while let Some((idx, lb)) = stack.pop() {
-            if lb >= threshold {
-                continue;
+        self.traverse(x, |visit| match visit {
+            Visit::Bound(lb) => lb < threshold,
+            Visit::Leaf(node) => {
+                out.extend(
+                    (node.a as usize..(node.a + node.b) as usize)
+                        .filter(|&s| {
+                            Some(self.ids[s]) != ignore
+                                && (x - self.centers[s]).length() - self.radii[s] < threshold
+                        })
+                        .map(|s| self.ids[s]),
+                );
+                true
             }
-            let node = &self.nodes[idx as usize];
-            if node.leaf {
-                for s in node.a as usize..(node.a + node.b) as usize {
-                    let id = self.ids[s];
-                    if Some(id) != ignore
-                        && (x - self.centers[s]).length() - self.radii[s] < threshold
-                    {
-                        out.push(id);
-                    }
-                }
-            } else {
-                push_ordered(&mut stack, &self.nodes, node, x);
-            }
-        }
+        });
         out.sort_unstable();
     }
 
@@ -180,7 +155,36 @@ impl SphereTree {
     }
 }
 
+/// What [`SphereTree::traverse`] asks its visitor about.
+enum Visit<'a> {
+    /// A node whose spheres all have signed distance at least this: descend into it?
+    Bound(f64),
+    /// A leaf to examine: go on?
+    Leaf(&'a Node),
+}
+
 impl SphereTree {
+    /// Nearest-first traversal from `x`: `visit` decides, from each node's lower bound, whether
+    /// to enter it, and examines each leaf entered; the traversal ends when it says to stop.
+    fn traverse<'a>(&'a self, x: DVec3, mut visit: impl FnMut(Visit<'a>) -> bool) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((0, lower_bound(&self.nodes[0], x)));
+        while let Some((idx, lb)) = stack.pop() {
+            if !visit(Visit::Bound(lb)) {
+                continue;
+            }
+            let node = &self.nodes[idx as usize];
+            if !node.leaf {
+                push_ordered(&mut stack, &self.nodes, node, x);
+            } else if !visit(Visit::Leaf(node)) {
+                return;
+            }
+        }
+    }
+
     /// Whether a sphere of leaf `node`, other than `ignore`, has signed distance below `threshold` at `x`.
     fn leaf_hit(&self, node: &Node, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
         (node.a as usize..(node.a + node.b) as usize).any(|s| {
