@@ -94,8 +94,9 @@ pub(crate) struct Tuning {
     /// Remove closed islands smaller than this fraction of the sample spacing (0 keeps all).
     #[arg(long)]
     min_island: Option<f64>,
-    /// Spheres farther than this many sample spacings from the surface own no tangency point
-    /// (they stay constraints); 0 gives every sphere points, as the reference.
+    /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
+    /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
+    /// samples always do).
     #[arg(long, value_name = "SPACINGS")]
     owner_band: Option<f64>,
     /// Cells per axis of the empty-space rasterization (default: the paper's 64 ceil(n^(1/3) / 16)).

@@ -20,6 +20,8 @@ pub(crate) struct UnitBox {
     pub(crate) clamp: f64,
     /// The sample spacing in the samples' coordinates ([`sample_spacing`]).
     pub(crate) input_spacing: f64,
+    /// The samples lie on a grid (their spacing is uniform).
+    grid: bool,
 }
 
 impl UnitBox {
@@ -49,6 +51,7 @@ impl UnitBox {
             spheres,
             clamp: cap,
             input_spacing: sample_spacing(samples),
+            grid: samples.as_grid().is_some(),
         }
     }
 
@@ -67,12 +70,13 @@ impl UnitBox {
         p * self.scale + self.trans
     }
 
-    /// Spheres at least this large own no tangency point (unit box): the clamp, or
+    /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
     /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
     pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
-        let band = params
-            .owner_band
-            .map_or(f64::INFINITY, |k| k * self.spacing());
+        let band = match params.owner_band {
+            Some(k) if self.grid => k * self.spacing(),
+            _ => f64::INFINITY,
+        };
         self.clamp.min(band)
     }
 

@@ -60,10 +60,13 @@ pub struct Params {
     /// fraction of the sample spacing counts as touched and keeps its points; only the spheres the
     /// mesh cuts or misses by more are fine-tuned (0: the reference's `tolerance` in every round).
     pub keep_band: f64,
-    /// Spheres farther from the surface than this many sample spacings (`|s| >= owner_band h`)
-    /// own no tangency point; they stay constraints, in the rasterization and in every
-    /// feasibility test. Default [`OWNER_BAND`]. `None`: every sphere owns points, as in the
-    /// reference.
+    /// On a grid, spheres farther from the surface than this many grid spacings
+    /// (`|s| >= owner_band h`) own no tangency point; they stay constraints, in the rasterization
+    /// and in every feasibility test. Default [`OWNER_BAND`]. `None`: every sphere owns points,
+    /// as in the reference. Scattered samples always give every sphere points: their spacing
+    /// varies, and where samples near the surface are sparse the far spheres' points are needed
+    /// (measured: 5,500 samples of a sphere, four in five far from it, mean vertex error 4x
+    /// larger with the band).
     pub owner_band: Option<f64>,
     /// Connected components whose bounding-box diagonal is below this fraction of the sample
     /// spacing are removed (0 keeps everything). Screened Poisson leaves small closed islands next

@@ -317,3 +317,47 @@ fn spheres_beyond_the_owner_band_own_no_point_and_stay_constraints() {
         .fold(0.0, f64::max);
     assert!(worst < 0.5 * h, "max vertex distance {worst}, spacing {h}");
 }
+
+/// Scattered samples, whose spacing varies, give every sphere points whatever the owner band.
+#[test]
+fn scattered_samples_ignore_the_owner_band() {
+    let torus = Analytic::Torus {
+        major: 0.55,
+        minor: 0.25,
+    };
+    let samples = scattered_samples(torus, 3000, 9);
+    let out = reconstruct(
+        &samples,
+        &Params {
+            rounds: 1,
+            owner_band: Some(0.5),
+            ..Params::default()
+        },
+    )
+    .expect("torus");
+    assert_eq!(out.report.far_spheres, 0);
+    let owners: std::collections::BTreeSet<u32> = out.points.owners.iter().copied().collect();
+    assert!(
+        owners.len() + out.report.spheres_without_point == samples.len(),
+        "{} owners, {} without a point, {} samples",
+        owners.len(),
+        out.report.spheres_without_point,
+        samples.len()
+    );
+    // The same band on a grid leaves most spheres without points.
+    let grid = grid_samples(torus, 14);
+    let banded = reconstruct(
+        &grid,
+        &Params {
+            rounds: 1,
+            owner_band: Some(0.5),
+            ..Params::default()
+        },
+    )
+    .expect("torus grid");
+    assert!(
+        banded.report.far_spheres * 2 > grid.len(),
+        "{:?}",
+        banded.report.far_spheres
+    );
+}
