@@ -268,17 +268,3 @@ pub(crate) fn mesh(mesh: &TriMesh) -> Result<MeshCheck> {
         components: topo.components,
     })
 }
-
-/// Cells of the finest octree level per sample spacing that [`spsr_depth_for`] aims at.
-pub const CELLS_PER_SPACING: f64 = 4.0;
-
-/// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
-/// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
-pub fn spsr_depth_for(h: f64) -> u32 {
-    let cps: f64 = std::env::var("RFTA_CPS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(CELLS_PER_SPACING);
-    let cells = 3.2 * cps / h.max(1e-9);
-    (cells.log2().ceil() as i64).clamp(5, 12) as u32
-}
