@@ -15,8 +15,11 @@
 //! [`check`] guards both ends: the values before anything is built, the mesh before it is
 //! returned. [`Params`] owns every setting and derives each stage's from them.
 //!
-//! The defaults are the paper's ([`Params::default`]); [`Params::paper_table`] is the setting of
-//! its Table 2. Results are deterministic for a given seed, whatever the thread count.
+//! The defaults ([`Params::default`]) are the paper's rounds, points per sphere, batch, step and
+//! tolerance, with two departures chosen by measurement (docs/speed.md): the Poisson depth follows
+//! the sample spacing ([`spsr_depth_for`]) and, on grids, only spheres within [`OWNER_BAND`]
+//! spacings of the surface own points. [`Params::paper_table`] is the setting of its Table 2.
+//! Results are deterministic for a given seed, whatever the thread count.
 //!
 //! Before any of that, the values are checked ([`check`]): fields that are not a distance
 //! (occupancy, random, rescaled, sentinel values) are refused with [`Error::NotADistance`], a
