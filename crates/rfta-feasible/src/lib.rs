@@ -59,15 +59,13 @@ pub struct Params {
     pub tau: f64,
     /// Maximum points per sphere (3; the paper's Table 2 used 30).
     pub n_max: usize,
-    /// Spheres with `|s| >= clamp` get no point (a clamped SDF); `+inf` for none.
-    pub clamp: f64,
+    /// Spheres at least this large get no point: those of a clamped SDF, and any the caller
+    /// keeps as constraints only (the pipeline's owner band); `+inf` for none.
+    pub owner_radius: f64,
     /// A cut is severe when the mesh comes within `severe * r` of the centre (0.8).
     pub severe: f64,
     /// Halvings of the transport step before giving up (20).
     pub halvings: usize,
-    /// A sphere whose surface the mesh passes within this distance of counts as touched in
-    /// [`fine_tune`]: its points stay where they are (0: `tol`, the reference's rule).
-    pub keep_band: f64,
 }
 
 impl Default for Params {
@@ -78,10 +76,9 @@ impl Default for Params {
             k_search: 22,
             tau: 0.01,
             n_max: 3,
-            clamp: f64::INFINITY,
+            owner_radius: f64::INFINITY,
             severe: 0.8,
             halvings: 20,
-            keep_band: 0.0,
         }
     }
 }
@@ -311,8 +308,9 @@ fn transport_checked(
 
 /// Initial tangency points of one sign set (`set`: indices into `spheres` / `values`): for each
 /// sphere, the empty-space sample nearest its centre projected onto it, then [`local_search`]
-/// against `tree` (a batch of the same sign set). Spheres that end infeasible, are clamped, or have
-/// zero radius (a sample exactly on the surface gives no normal) get no point.
+/// against `tree` (a batch of the same sign set). Spheres that end infeasible, reach
+/// [`Params::owner_radius`], or have zero radius (a sample exactly on the surface gives no
+/// normal) get no point.
 pub fn initial_points(
     spheres: &[Sphere],
     values: &[f64],
@@ -355,7 +353,7 @@ pub fn initial_points_counted(
         .map(|&i| {
             let s = spheres[i as usize];
             let v = values[i as usize];
-            if s.radius >= params.clamp || s.radius <= 0.0 {
+            if s.radius >= params.owner_radius || s.radius <= 0.0 {
                 return Vec::new();
             }
             let nn = kd
@@ -437,26 +435,25 @@ pub fn fine_tune_counted(
     for i in 0..n {
         start[i + 1] += start[i];
     }
-    let band = tol.max(params.keep_band);
     let per: Vec<Vec<(DVec3, DVec3)>> = (0..n as u32)
         .into_par_iter()
         .map(|i| {
             let s = spheres[i as usize];
             let v = values[i as usize];
             let r = s.radius;
-            if r >= params.clamp || r <= 0.0 {
+            if r >= params.owner_radius || r <= 0.0 {
                 return Vec::new();
             }
             let cp = index.closest_point(s.center);
             let di = cp.distance_squared.sqrt();
             let owned = start[i as usize]..start[i as usize + 1];
             let k = owned.len();
-            let cut = di < r - band && r > tol;
-            let miss = di > r + band && r > tol;
+            let cut = di < r - tol && r > tol;
+            let miss = di > r + tol && r > tol;
             let search = |x: DVec3| local_search(spheres, tree, i, x, params);
             let oriented = |x: DVec3| (x, normal_at(s.center, v, x));
             if k > 0 && !cut && !miss {
-                // Touched within the band: the points stay. A point that passed the test against
+                // Touched within the tolerance: the points stay. A point that passed the test against
                 // this tree would pass the local search's first test and come back unchanged.
                 return owned
                     .filter_map(|a| {

@@ -286,4 +286,41 @@ mod tests {
         let (empty, removed) = remove_islands(&TriMesh::default(), |_, _| Some(Island::Small));
         assert!(empty.faces.is_empty() && removed == [0, 0]);
     }
+
+    /// The verdict on a small closed component, against grids whose samples describe it or not:
+    /// kept when a sample inside says so, removed when the samples say empty space (or solid).
+    #[test]
+    fn a_small_component_stays_only_where_the_samples_enclose_it() {
+        use rfta_geom::{Grid, SdfSamples};
+        let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+        let samples = |f: &dyn Fn(DVec3) -> f64| {
+            let values = (0..grid.len()).map(|i| f(grid.position(i))).collect();
+            SdfSamples::grid(grid, values).expect("samples")
+        };
+        let ball_sdf = |p: DVec3| p.length() - 0.5;
+        let (solid_c, cavity_c) = (DVec3::new(0.8, 0.0, 0.0), DVec3::new(0.2, 0.0, 0.0));
+        let with_solid = samples(&|p| ball_sdf(p).min((p - solid_c).length() - 0.05));
+        let with_cavity = samples(&|p| ball_sdf(p).max(0.05 - (p - cavity_c).length()));
+        let plain = samples(&ball_sdf);
+        // A small outward ball (a solid), and a small inward one (a cavity), 1.7 spacings across.
+        let solid = ball(solid_c, 0.05);
+        let mut cavity = ball(cavity_c, 0.05);
+        cavity.flip();
+        let params = Params::default();
+        let judge_on = |s: &SdfSamples, m: &TriMesh| {
+            let unit = UnitBox::new(s, None);
+            let faces: Vec<usize> = (0..m.faces.len()).collect();
+            let bounds = Aabb::from_points(&m.vertices);
+            judge(&unit, &params, &OnceLock::new(), m, &faces, bounds)
+        };
+        assert_eq!(judge_on(&with_solid, &solid), None);
+        assert_eq!(judge_on(&plain, &solid), Some(Island::Unsupported));
+        assert_eq!(judge_on(&with_cavity, &cavity), None);
+        assert_eq!(judge_on(&plain, &cavity), Some(Island::Unsupported));
+        // Below half a spacing across: small, whatever the samples say.
+        assert_eq!(
+            judge_on(&with_solid, &ball(solid_c, 0.01)),
+            Some(Island::Small)
+        );
+    }
 }

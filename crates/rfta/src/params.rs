@@ -56,10 +56,6 @@ pub struct Params {
     pub gpu: bool,
     /// Worker threads (`None`: rayon's global pool). The mesh does not depend on it.
     pub threads: Option<usize>,
-    /// From round [`SETTLE_ROUNDS`]` + 1` on, a sphere whose surface the mesh passes within this
-    /// fraction of the sample spacing counts as touched and keeps its points; only the spheres the
-    /// mesh cuts or misses by more are fine-tuned (0: the reference's `tolerance` in every round).
-    pub keep_band: f64,
     /// On a grid, spheres farther from the surface than this many grid spacings
     /// (`|s| >= owner_band h`) own no tangency point; they stay constraints, in the rasterization
     /// and in every feasibility test. Default [`OWNER_BAND`]. `None`: every sphere owns points,
@@ -94,7 +90,6 @@ impl Default for Params {
             seed: 3452,
             gpu: false,
             threads: None,
-            keep_band: 0.0,
             owner_band: Some(OWNER_BAND),
             min_island: 0.5,
         }
@@ -114,9 +109,6 @@ pub const CELLS_PER_SPACING: f64 = 4.0;
 /// what the near spheres say; without them the mean Chamfer drops by 9% (N = 10), 25% (N = 20)
 /// and 39% (N = 30) and the time by 2-6x, with one shape in eight more losing its genus.
 pub const OWNER_BAND: f64 = 3.0;
-
-/// Rounds fine-tuned with the reference's tolerance before [`Params::keep_band`] applies.
-pub const SETTLE_ROUNDS: usize = 2;
 
 /// The box of the Poisson solves, in unit boxes (the reference's `point_cloud_to_mesh`).
 const SPSR_BOX: f64 = 3.2;
@@ -167,16 +159,16 @@ impl Params {
             .unwrap_or_else(|| rfta_raster::default_resolution(n))
     }
 
-    /// The tangency-point settings for `n` samples, where spheres of radius `clamp` and larger
-    /// own no point (unit box; clamped or beyond [`Params::owner_band`]).
-    pub fn feasible_params(&self, n: usize, clamp: f64) -> rfta_feasible::Params {
+    /// The tangency-point settings for `n` samples, where spheres of radius `owner_radius` and
+    /// larger own no point (unit box; clamped or beyond [`Params::owner_band`]).
+    pub fn feasible_params(&self, n: usize, owner_radius: f64) -> rfta_feasible::Params {
         rfta_feasible::Params {
             tol: self.tolerance,
             local_search_iters: self.local_search_moves,
             k_search: rfta_feasible::Params::k_search_for(n),
             tau: self.transport_step,
             n_max: self.max_points_per_sphere,
-            clamp,
+            owner_radius,
             ..rfta_feasible::Params::default()
         }
     }
@@ -239,12 +231,6 @@ impl Params {
             return bad(format!(
                 "min_island must be finite and >= 0, got {}",
                 self.min_island
-            ));
-        }
-        if !(self.keep_band >= 0.0 && self.keep_band.is_finite()) {
-            return bad(format!(
-                "keep_band must be finite and >= 0, got {}",
-                self.keep_band
             ));
         }
         if let Some(b) = self.owner_band

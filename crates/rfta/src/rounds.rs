@@ -42,6 +42,10 @@ impl Rounds {
     ) {
         let n = unit.len();
         report.spsr_depth = self.spsr.depth;
+        // Without batching every round tests against the same tree: built once.
+        let all = params
+            .batch_holds_all(n)
+            .then(|| SphereTree::new(&unit.spheres));
         for round in 1..=params.rounds {
             progress(Stage::FineTune {
                 round,
@@ -49,11 +53,18 @@ impl Rounds {
             });
             report.points_per_round.push(self.cloud.len());
             let t = Instant::now();
-            let tree = SphereTree::batch(
-                &unit.spheres,
-                params.batch_size,
-                Seeds(params.seed).round_batch(round),
-            );
+            let batch;
+            let tree = match &all {
+                Some(t) => t,
+                None => {
+                    batch = SphereTree::batch(
+                        &unit.spheres,
+                        params.batch_size,
+                        Seeds(params.seed).round_batch(round),
+                    );
+                    &batch
+                }
+            };
             let mesh = match solve(&self.cloud, &self.spsr) {
                 Ok(m) => m,
                 Err(e) => {
@@ -67,19 +78,15 @@ impl Rounds {
             let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
             // tested against this same set last round.
-            let cloud_feasible = round > 1 && params.batch_holds_all(n);
-            let mut feasible = self.feasible.clone();
-            if round > crate::params::SETTLE_ROUNDS {
-                feasible.keep_band = params.keep_band * unit.spacing();
-            }
+            let cloud_feasible = round > 1 && all.is_some();
             let next = counted(n, progress, |done| {
                 rfta_feasible::fine_tune_counted(
                     &unit.spheres,
                     &unit.values,
                     &mesh,
                     &self.cloud,
-                    &tree,
-                    &feasible,
+                    tree,
+                    &self.feasible,
                     cloud_feasible,
                     done,
                 )
