@@ -32,6 +32,15 @@ use anyhow::{Context, Result, bail};
 use rfta_geom::{Grid, Layout, TriMesh};
 use rfta_mesh::MeshIndex;
 
+/// The rows of the summary table, in order: method and threads.
+const REPORT_ORDER: [(&str, usize); 5] = [
+    ("rfta", 2),
+    ("rfta-fast", 2),
+    ("mc", 1),
+    ("rfta", 1),
+    ("gpytoolbox", 1),
+];
+
 /// One input grid.
 struct Input {
     shape: String,
@@ -106,14 +115,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     let a = parse(root, args)?;
     if let Some(csv) = &a.from_csv {
         let (rows, inputs) = read_csv(csv)?;
-        let methods = [
-            ("rfta", 2),
-            ("rfta-fast", 2),
-            ("mc", 1),
-            ("rfta", 1),
-            ("gpytoolbox", 1),
-        ];
-        let report = report(&rows, &inputs, &methods)?;
+        let report = report(&rows, &inputs)?;
         println!("{report}");
         return Ok(());
     }
@@ -171,7 +173,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         None => println!("gpytoolbox: no Python with gpytoolbox found (--python PATH); skipped"),
     }
     let exe = std::env::current_exe()?;
-    let mut methods: Vec<(&str, usize)> = vec![("rfta", 2), ("rfta-fast", 2), ("mc", 1)];
+    let methods: [(&str, usize); 3] = [("rfta", 2), ("rfta-fast", 2), ("mc", 1)];
     let mut csv = String::from(
         "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status\n",
     );
@@ -179,7 +181,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     for input in &inputs {
         let gt = rfta_io::read_mesh(&input.gt)?;
         let gt_index = MeshIndex::new(&gt)?;
-        let mut these = methods.clone();
+        let mut these = methods.to_vec();
         if Some(&input.n) == a.res.first() {
             these.push(("rfta", 1));
         }
@@ -247,10 +249,8 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             rows.push((input.shape.clone(), input.n, method.to_string(), threads, r));
         }
     }
-    methods.push(("rfta", 1));
-    methods.push(("gpytoolbox", 1));
     let inputs: Vec<(String, usize)> = inputs.iter().map(|i| (i.shape.clone(), i.n)).collect();
-    let report = report(&rows, &inputs, &methods)?;
+    let report = report(&rows, &inputs)?;
     std::fs::write(a.out.join("e2e.csv"), csv)?;
     std::fs::write(a.out.join("e2e.md"), &report)?;
     println!("\n{report}\nwrote {}", a.out.join("e2e.md").display());
@@ -306,7 +306,6 @@ fn name_of(dir: &Path) -> String {
 fn report(
     rows: &[(String, usize, String, usize, Result<Run>)],
     inputs: &[(String, usize)],
-    methods: &[(&str, usize)],
 ) -> Result<String> {
     let mut s = String::new();
     writeln!(
@@ -329,7 +328,7 @@ fn report(
             .filter(|i| i.1 == n)
             .map(|i| i.0.as_str())
             .collect();
-        for &(m, t) in methods {
+        for &(m, t) in &REPORT_ORDER {
             // Shapes this method and marching cubes both finished (gpytoolbox too, when it ran).
             let ok: Vec<&str> = shapes
                 .iter()
