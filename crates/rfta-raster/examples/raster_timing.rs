@@ -1,5 +1,6 @@
 //! One-shot timing of the rasterizer on the bunny's 51^3 grid (see benches/raster.rs for the
-//! measured benchmark): `cargo run --release -p rfta-raster --example raster_timing [--features gpu] -- RES`.
+//! measured benchmark): `cargo run --release -p rfta-raster --example raster_timing [--features gpu] -- RES [GRID.npy]`
+//! (another grid in [-1, 1]^3, e.g. from `rfta sample`, instead of the bunny's).
 
 #![expect(clippy::print_stdout, reason = "an example reports its timing")]
 
@@ -13,8 +14,13 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(128);
-    let data = rfta_testkit::data_dir().expect("../shared/data");
-    let raw = rfta_io::read_sdf(&data.join("inputs/bunny/sdf_n50.npy"), None).expect("grid");
+    let path = match std::env::args().nth(2) {
+        Some(p) => p.into(),
+        None => rfta_testkit::data_dir()
+            .expect("../shared/data")
+            .join("inputs/bunny/sdf_n50.npy"),
+    };
+    let raw = rfta_io::read_sdf(&path, None).expect("grid");
     let rfta_geom::Layout::Grid(grid) = raw.layout else {
         return;
     };

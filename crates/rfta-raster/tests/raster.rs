@@ -36,6 +36,36 @@ fn has_occupied_neighbour(occ: &rfta_raster::BitGrid, i: usize, j: usize, k: usi
     })
 }
 
+/// Occupancy at every cell equals the oracle at its sample, and the band (empty with an occupied
+/// neighbour) is exactly what was emitted, in grid order.
+fn assert_matches_brute_force(centers: &[DVec3], radii: &[f64], params: &RasterParams) {
+    let res = params.res;
+    let occ = occupancy(centers, radii, params, Backend::Cpu).expect("occupancy");
+    let out = rasterize(centers, radii, params, Backend::Cpu).expect("rasterize");
+    assert_eq!(out.n_occupied, occ.count_ones());
+    let mut expected_points = Vec::new();
+    for i in 0..res {
+        for j in 0..res {
+            for k in 0..res {
+                let sample = cell_sample(params, [i as u32, j as u32, k as u32]);
+                let lo = DVec3::new(i as f64, j as f64, k as f64) / res as f64;
+                assert!(
+                    sample.cmpge(lo).all()
+                        && sample.cmplt(lo + DVec3::splat(1.0 / res as f64)).all()
+                );
+                let occupied = brute_occupied(res, centers, radii, sample);
+                assert_eq!(occ.get(i, j, k), occupied, "res={res} cell {i} {j} {k}");
+                if !occupied && has_occupied_neighbour(&occ, i, j, k) {
+                    expected_points.push(sample);
+                }
+            }
+        }
+    }
+    // The spheres' bounding box widened by one cell holds every band cell.
+    assert_eq!(out.points, expected_points, "res={res}");
+    assert!(centers.is_empty() || !out.points.is_empty());
+}
+
 #[test]
 fn occupancy_and_band_match_brute_force_at_every_cell() {
     for (n, max_r, res, seed) in [
@@ -44,39 +74,27 @@ fn occupancy_and_band_match_brute_force_at_every_cell() {
         (60, 0.12, 33, 3),
         (5, 0.9, 20, 4),
         (25, 0.25, 12, 77),
+        (40, 0.5, 97, 6),
     ] {
         let (centers, radii) = random_spheres(n, seed, max_r);
-        let params = RasterParams { res, seed };
-        let occ = occupancy(&centers, &radii, &params, Backend::Cpu).expect("occupancy");
-        let out = rasterize(&centers, &radii, &params, Backend::Cpu).expect("rasterize");
-        assert_eq!(out.n_occupied, occ.count_ones());
-        // Every cell: occupancy equals the oracle at its sample, and the band (empty with an
-        // occupied neighbour) is exactly what was emitted, in grid order.
-        let mut expected_points = Vec::new();
-        for i in 0..res {
-            for j in 0..res {
-                for k in 0..res {
-                    let sample = cell_sample(&params, [i as u32, j as u32, k as u32]);
-                    let lo = DVec3::new(i as f64, j as f64, k as f64) / res as f64;
-                    assert!(
-                        sample.cmpge(lo).all()
-                            && sample.cmplt(lo + DVec3::splat(1.0 / res as f64)).all()
-                    );
-                    let occupied = brute_occupied(res, &centers, &radii, sample);
-                    assert_eq!(
-                        occ.get(i, j, k),
-                        occupied,
-                        "n={n} res={res} cell {i} {j} {k}"
-                    );
-                    if !occupied && has_occupied_neighbour(&occ, i, j, k) {
-                        expected_points.push(sample);
-                    }
-                }
-            }
-        }
-        // These spheres' bounding box widened by one cell holds every band cell.
-        assert_eq!(out.points, expected_points, "n={n} res={res}");
-        assert!(n == 0 || !out.points.is_empty());
+        assert_matches_brute_force(&centers, &radii, &RasterParams { res, seed });
+    }
+}
+
+/// Grids of several superblocks (64 cells; at 130 the last is partial): one sphere holds the
+/// superblock of cells 64..127 on every axis (its farthest corner is 0.43 from the centre, inside
+/// the shrunk radius 0.49), others hold blocks or cut it, small ones sit in the open space.
+#[test]
+fn held_superblocks_and_blocks_match_brute_force() {
+    let (mut centers, mut radii) = random_spheres(30, 8, 0.12);
+    centers.extend([
+        DVec3::splat(0.74),
+        DVec3::new(0.2, 0.3, 0.8),
+        DVec3::new(0.9, 0.1, 0.2),
+    ]);
+    radii.extend([0.5, 0.3, 0.35]);
+    for res in [128, 130] {
+        assert_matches_brute_force(&centers, &radii, &RasterParams { res, seed: 5 });
     }
 }
 

@@ -41,6 +41,7 @@ pub(crate) fn initial_points(
     report.negative = neg.len();
     report.non_negative = pos.len();
     let mut parts = Vec::new();
+    let mut raster_time = std::time::Duration::ZERO;
     for (negative, set) in [(false, &pos), (true, &neg)] {
         if set.is_empty() {
             continue;
@@ -51,7 +52,9 @@ pub(crate) fn initial_points(
             .map(|&i| unit.spheres[i as usize].radius)
             .collect();
         let raster = params.raster_params(res, negative);
+        let t_raster = Instant::now();
         let empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+        raster_time += t_raster.elapsed();
         report.empty_space_points += empty.points.len();
         let batch = draw_batch(
             set,
@@ -73,7 +76,10 @@ pub(crate) fn initial_points(
     }
     let cloud = merge_by_owner(parts);
     report.feasible_initial = cloud.len();
-    report.timings.push(("initial points".into(), t.elapsed()));
+    report.timings.push(("rasterize".into(), raster_time));
+    report
+        .timings
+        .push(("initial points".into(), t.elapsed() - raster_time));
     if cloud.len() < 3 {
         return Err(Error::TooFewPoints {
             feasible: cloud.len(),
