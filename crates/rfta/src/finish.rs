@@ -25,7 +25,7 @@ pub(crate) fn finish(
     let cloud = rounds.cloud;
     report.points_per_round.push(cloud.len());
     let t = Instant::now();
-    let mut mesh = crate::rounds::solve(&cloud, &rounds.spsr)?;
+    let mut mesh = crate::rounds::solve(&cloud, &params.spsr_params(Some(unit.spacing())))?;
     report
         .timings
         .push(("final screened Poisson".into(), t.elapsed()));

@@ -59,7 +59,9 @@ pub use rfta_sphere_tree as sphere_tree;
 pub use rfta_spsr as spsr;
 
 pub use memory::{check_memory, estimate_peak_memory, format_bytes};
-pub use params::{CELLS_PER_SPACING, OWNER_BAND, Params, SPSR_FULL_DEPTH, Seeds, spsr_depth_for};
+pub use params::{
+    CELLS_PER_SPACING, OWNER_BAND, Params, ROUND_SWEEPS, SPSR_FULL_DEPTH, Seeds, spsr_depth_for,
+};
 pub use report::{MeshCheck, Reconstruction, Report, Stage};
 
 use rfta_geom::SdfSamples;

@@ -17,7 +17,7 @@ use crate::{Params, Report, Stage};
 pub(crate) struct Rounds {
     /// The tangency points, sorted by owner.
     pub(crate) cloud: TangentPoints,
-    /// The screened Poisson setting of every solve.
+    /// The screened Poisson setting of the solves inside the rounds.
     pub(crate) spsr: SpsrParams,
     feasible: rfta_feasible::Params,
 }
@@ -26,7 +26,7 @@ impl Rounds {
     pub(crate) fn new(unit: &UnitBox, params: &Params, cloud: TangentPoints) -> Self {
         Self {
             cloud,
-            spsr: params.spsr_params(Some(unit.spacing())),
+            spsr: params.round_spsr_params(Some(unit.spacing())),
             feasible: params.feasible_params(unit.len(), unit.owner_radius(params)),
         }
     }
