@@ -192,6 +192,24 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
             r.unsupported_removed
         ));
     }
+    if r.vertices_pushed_out > 0 {
+        ui.detail(format!(
+            "moved {} vertices out of the sample spheres they entered",
+            r.vertices_pushed_out
+        ));
+    }
+    let c = &r.consistency;
+    ui.detail(format!(
+        "agreement with the {} samples (h = {:.4}): {} on the wrong side, {} spheres entered by more than {} h (deepest {:.2} h), {} gaps over {} h",
+        c.samples,
+        c.spacing,
+        c.sign_errors,
+        c.entered,
+        rfta::consistency::ENTER_MARGIN,
+        c.deepest_entry,
+        c.gaps,
+        rfta::consistency::GAP_MARGIN
+    ));
     if let Some(why) = &r.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));
     }

@@ -5,16 +5,18 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use rfta_feasible::TangentPoints;
+use rfta_geom::glam::DVec3;
 use rfta_geom::kernels::solid_angle;
-use rfta_geom::{Aabb, TriMesh};
+use rfta_geom::{Aabb, SdfSamples, TriMesh};
 use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
 use crate::rounds::Rounds;
-use crate::{Params, Reconstruction, Report, Result, Stage, check};
+use crate::{Params, Reconstruction, Report, Result, Stage, check, consistency};
 
 /// The last solve on the final points, and the [`Reconstruction`] in the input's coordinates.
 pub(crate) fn finish(
+    samples: &SdfSamples,
     unit: &UnitBox,
     params: &Params,
     rounds: Rounds,
@@ -42,7 +44,35 @@ pub(crate) fn finish(
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
+    let t = Instant::now();
+    // The spheres that own points: near the surface and small, so the tree prunes well. The far
+    // ones are large and tangent to the same surface, which no bound can rule out cheaply; a
+    // smooth surface that enters one of them usually enters the near spheres between it and the
+    // surface as well.
+    let r_own = unit.owner_radius(params);
+    let near: Vec<u32> = (0..n as u32)
+        .filter(|&i| unit.spheres[i as usize].radius < r_own)
+        .collect();
+    let near = SphereTree::with_indices(&unit.spheres, &near);
+    report.vertices_pushed_out =
+        push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
+    report.timings.push(("spheres cleared".into(), t.elapsed()));
     report.mesh = check::mesh(&mesh)?;
+    let t = Instant::now();
+    report.consistency = consistency::measure(samples, &mesh, report.clamp)?;
+    report
+        .timings
+        .push(("consistency check".into(), t.elapsed()));
+    let c = &report.consistency;
+    if !c.is_consistent() {
+        report.warnings.push(format!(
+            "the mesh disagrees with the samples: {} on the wrong side of it, {} whose sphere it enters by more than {} spacing (deepest: {:.2} spacings)",
+            c.sign_errors,
+            c.entered,
+            consistency::ENTER_MARGIN,
+            c.deepest_entry
+        ));
+    }
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
     let eligible = n - report.far_spheres;
@@ -74,6 +104,55 @@ pub(crate) fn finish(
         points,
         report,
     })
+}
+
+/// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
+/// margin at which [`crate::consistency`] counts a sphere as entered, and large enough that the
+/// sphere tree prunes the many spheres the surface merely touches.
+const PUSH_DEPTH: f64 = 0.02;
+
+/// Passes of [`push_out_of_spheres`] per vertex: leaving the deepest sphere can land a vertex in
+/// a neighbour, which the next pass leaves in turn.
+const PUSH_PASSES: usize = 8;
+
+/// The surface may not enter a sample sphere (Sellán et al. 2024, §3), yet the final screened
+/// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners,
+/// thin parts). Each vertex inside some sphere by more than `depth` (unit box) moves radially onto
+/// the boundary of the sphere it is deepest in, up to [`PUSH_PASSES`] times; the connectivity
+/// stays. Each vertex moves on its own, so the result does not depend on the thread count.
+/// Returns how many vertices moved.
+fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, depth: f64) -> usize {
+    use rayon::prelude::*;
+    let moved: Vec<Option<DVec3>> = mesh
+        .vertices
+        .par_iter()
+        .map_init(Vec::new, |hits, &v| {
+            let mut p = unit.to_unit(v);
+            let mut moved = false;
+            for _ in 0..PUSH_PASSES {
+                tree.spheres_containing_into(p, 1, -depth, None, hits);
+                let Some(&(_, j)) = hits.first() else {
+                    break;
+                };
+                let s = unit.spheres[j as usize];
+                let dir = (p - s.center).normalize_or_zero();
+                if dir == DVec3::ZERO {
+                    break;
+                }
+                p = s.center + dir * s.radius;
+                moved = true;
+            }
+            moved.then(|| unit.to_input(p))
+        })
+        .collect();
+    let mut count = 0;
+    for (v, m) in mesh.vertices.iter_mut().zip(moved) {
+        if let Some(p) = m {
+            *v = p;
+            count += 1;
+        }
+    }
+    count
 }
 
 /// Why a component of the mesh goes.
@@ -232,7 +311,6 @@ fn remove_islands(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rfta_geom::glam::DVec3;
     use rfta_geom::shapes;
 
     fn union(parts: &[TriMesh]) -> TriMesh {
@@ -250,6 +328,46 @@ mod tests {
         let mut m = shapes::icosphere(r, 2);
         m.map_vertices(|v| v + c);
         m
+    }
+
+    /// A surface sunk 0.05 into the ball of radius 0.5 (grid spacing 0.1) enters the inside
+    /// samples' spheres; pushed out, no vertex is deeper than the push depth in any of them (brute
+    /// force), and a surface on the true sphere does not move.
+    #[test]
+    fn pushed_vertices_leave_every_sphere_and_others_stay() {
+        let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
+        let values = (0..grid.len())
+            .map(|i| grid.position(i).length() - 0.5)
+            .collect();
+        let samples = SdfSamples::grid(grid, values).expect("samples");
+        let unit = UnitBox::new(&samples, None);
+        let all: Vec<u32> = (0..unit.len() as u32).collect();
+        let tree = SphereTree::with_indices(&unit.spheres, &all);
+        let depth = PUSH_DEPTH * unit.spacing();
+        let deepest = |mesh: &TriMesh| {
+            mesh.vertices
+                .iter()
+                .flat_map(|&v| {
+                    let p = unit.to_unit(v);
+                    unit.spheres
+                        .iter()
+                        .map(move |s| s.radius - (p - s.center).length())
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        let mut sunk = shapes::icosphere(0.45, 3);
+        assert!(deepest(&sunk) > 0.02, "the test surface must enter spheres");
+        let moved = push_out_of_spheres(&mut sunk, &unit, &tree, depth);
+        assert_eq!(moved, sunk.vertices.len());
+        assert!(deepest(&sunk) <= depth + 1e-12, "{}", deepest(&sunk));
+        // Out of the spheres is back near the true surface (within the grid's resolution).
+        for v in &sunk.vertices {
+            assert!((v.length() - 0.5).abs() < 0.03, "{}", v.length());
+        }
+        let mut exact = shapes::icosphere(0.5, 3);
+        let before = exact.clone();
+        assert_eq!(push_out_of_spheres(&mut exact, &unit, &tree, depth), 0);
+        assert_eq!(exact, before);
     }
 
     #[test]

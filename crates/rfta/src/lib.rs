@@ -44,6 +44,7 @@
 //! ```
 
 pub mod check;
+pub mod consistency;
 mod finish;
 mod initial;
 mod memory;
@@ -58,6 +59,7 @@ pub use rfta_raster as raster;
 pub use rfta_sphere_tree as sphere_tree;
 pub use rfta_spsr as spsr;
 
+pub use consistency::Consistency;
 pub use memory::{check_memory, estimate_peak_memory, format_bytes};
 pub use params::{
     CELLS_PER_SPACING, OWNER_BAND, Params, ROUND_SWEEPS, SPSR_FULL_DEPTH, Seeds, spsr_depth_for,
@@ -110,6 +112,9 @@ pub enum Error {
     /// The final screened Poisson solve failed.
     #[error("screened Poisson: {0}")]
     Spsr(#[from] rfta_spsr::Error),
+    /// A mesh could not be indexed for [`consistency::measure`] (no faces, a non-finite vertex).
+    #[error("consistency check: {0}")]
+    Consistency(#[from] rfta_mesh::Error),
     /// The thread pool could not be created.
     #[error("could not start {threads} threads: {reason}")]
     ThreadPool {
@@ -176,5 +181,5 @@ fn run(
     let cloud = initial::initial_points(&unit, params, &mut report, progress)?;
     let mut rounds = rounds::Rounds::new(&unit, params, cloud);
     rounds.run(&unit, params, &mut report, progress);
-    finish::finish(&unit, params, rounds, report, progress)
+    finish::finish(samples, &unit, params, rounds, report, progress)
 }

@@ -91,6 +91,8 @@ pub struct Report {
     pub far_spheres: usize,
     /// Small closed islands removed from the final mesh (see [`crate::Params::min_island`]).
     pub islands_removed: usize,
+    /// Mesh vertices that were inside a sample sphere and moved onto its boundary.
+    pub vertices_pushed_out: usize,
     /// Components removed from the final mesh because the samples contradict them: every vertex
     /// lies inside a sample sphere (by more than the tolerance), or, at most 2 spacings across,
     /// they enclose no sample of the sign their orientation gives their inside.
@@ -103,6 +105,9 @@ pub struct Report {
     pub clamp: Option<f64>,
     /// What the output mesh is like (checked before it is returned).
     pub mesh: MeshCheck,
+    /// How the output mesh agrees with every sample: sign errors, entered spheres, gaps
+    /// ([`crate::consistency`]).
+    pub consistency: crate::Consistency,
     /// Things the caller should know: inconsistent samples, a detected clamp, more than 5% of the
     /// spheres without a point, a mesh that is not watertight.
     pub warnings: Vec<String>,

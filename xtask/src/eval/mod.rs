@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use rfta_geom::{Grid, Layout, TriMesh, glam::DMat3, glam::DVec3, rng};
+use rfta_geom::{Grid, Layout, SdfSamples, TriMesh, glam::DMat3, glam::DVec3, rng};
 use rfta_mesh::MeshIndex;
 
 /// One shape of the evaluation.
@@ -51,6 +51,8 @@ pub(crate) struct Row {
     pub(crate) genus: Option<i64>,
     pub(crate) gt_genus: Option<i64>,
     pub(crate) components: usize,
+    /// Agreement with every input sample (`rfta::consistency`); `None` when the method failed.
+    pub(crate) consistency: Option<rfta::Consistency>,
     pub(crate) status: String,
 }
 
@@ -200,6 +202,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                     genus: None,
                     gt_genus: None,
                     components: 0,
+                    consistency: None,
                     status,
                 });
             }
@@ -214,6 +217,8 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         for &n in &a.res {
             let (grid, values) = grid_for(shape, &gt_index, n)?;
             let positions: Vec<DVec3> = (0..grid.len()).map(|i| grid.position(i)).collect();
+            let samples = SdfSamples::grid(grid, values.clone())
+                .with_context(|| format!("{} n={n}: grid samples", shape.name))?;
             for method in &a.methods {
                 bar.set_message(format!("{} n={n} {method}", shape.name));
                 let t = Instant::now();
@@ -229,6 +234,8 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                         let chamfer = rfta_metrics::chamfer_indexed(gt, rec, a.samples, 1);
                         let hausdorff = rfta_metrics::hausdorff_indexed(gt, rec);
                         let e_sdf = rfta_metrics::sdf_energy_indexed(&positions, &values, &index);
+                        let consistency = rfta::consistency::measure(&samples, &mesh, None)
+                            .with_context(|| format!("{} n={n} {method}", shape.name))?;
                         if method == "mc" || n == *a.res.last().unwrap_or(&n) {
                             shape_renders.push((format!("{method} n={n}"), mesh.clone()));
                         }
@@ -245,6 +252,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                             genus: s.genus,
                             gt_genus: gt_summary.genus,
                             components: s.components,
+                            consistency: Some(consistency),
                             status: "ok".into(),
                         }
                     }
@@ -315,6 +323,7 @@ fn failed_row(
         genus: None,
         gt_genus,
         components: 0,
+        consistency: None,
         status: why,
     }
 }

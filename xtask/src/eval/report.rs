@@ -64,13 +64,15 @@ fn reference_method(m: &str) -> String {
 
 pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,status\n",
+        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,sign_errors,entered,gaps,deepest_entry,status\n",
     );
     for r in rows {
         let g = |v: Option<i64>| v.map(|g| g.to_string()).unwrap_or_default();
+        let c =
+            |f: fn(&rfta::Consistency) -> String| r.consistency.as_ref().map(f).unwrap_or_default();
         writeln!(
             s,
-            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{}",
+            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{}",
             r.shape,
             r.n,
             r.method,
@@ -83,6 +85,10 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             g(r.genus),
             g(r.gt_genus),
             r.components,
+            c(|c| c.sign_errors.to_string()),
+            c(|c| c.entered.to_string()),
+            c(|c| c.gaps.to_string()),
+            c(|c| format!("{:.3}", c.deepest_entry)),
             r.status.replace(',', ";")
         )?;
     }
@@ -210,6 +216,7 @@ pub(crate) fn write_markdown(
             writeln!(s)?;
         }
     }
+    write_consistency(&mut s, rows, res, methods)?;
     writeln!(s, "## Time\n")?;
     writeln!(
         s,
@@ -261,9 +268,9 @@ pub(crate) fn write_markdown(
     writeln!(s, "\n## Per shape\n")?;
     writeln!(
         s,
-        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | status |"
+        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | wrong side / entered | status |"
     )?;
-    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
     for r in rows {
         let refc = reference
             .get(&(r.shape.clone(), r.n, reference_method(&r.method)))
@@ -276,7 +283,7 @@ pub(crate) fn write_markdown(
             .unwrap_or_else(|| "-".into());
         writeln!(
             s,
-            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} |",
+            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} | {} |",
             r.shape,
             r.n,
             r.method,
@@ -286,6 +293,10 @@ pub(crate) fn write_markdown(
             r.e_sdf,
             r.watertight,
             r.components,
+            r.consistency
+                .as_ref()
+                .map(|c| format!("{} / {}", c.sign_errors, c.entered))
+                .unwrap_or_else(|| "-".into()),
             r.status
         )?;
     }
@@ -294,6 +305,55 @@ pub(crate) fn write_markdown(
         "\n`contact_sheet.png`: one row per shape, the ground truth first, then each method's output by resolution."
     )?;
     rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
+    Ok(())
+}
+
+/// Agreement with the samples and with the ground truth's topology, per N and method.
+fn write_consistency(
+    s: &mut String,
+    rows: &[Row],
+    res: &[usize],
+    methods: &[String],
+) -> Result<()> {
+    writeln!(s, "## Agreement with the samples and the topology\n")?;
+    writeln!(
+        s,
+        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; the shapes whose output has the ground truth's genus and one component.\n",
+        rfta::consistency::SIGN_MARGIN,
+        rfta::consistency::ENTER_MARGIN
+    )?;
+    writeln!(
+        s,
+        "| N | method | shapes | wrong side (shapes) | entered (shapes) | worst entered % | right genus, one component |\n|---|---|---|---|---|---|---|"
+    )?;
+    for &n in res {
+        for m in methods {
+            let sel: Vec<&Row> = rows.iter().filter(|r| r.n == n && &r.method == m).collect();
+            let done: Vec<(&Row, &rfta::Consistency)> = sel
+                .iter()
+                .filter_map(|r| r.consistency.as_ref().map(|c| (*r, c)))
+                .collect();
+            let wrong: usize = done.iter().map(|(_, c)| c.sign_errors).sum();
+            let wrong_shapes = done.iter().filter(|(_, c)| c.sign_errors > 0).count();
+            let entered: usize = done.iter().map(|(_, c)| c.entered).sum();
+            let entered_shapes = done.iter().filter(|(_, c)| c.entered > 0).count();
+            let worst = done
+                .iter()
+                .map(|(_, c)| 100.0 * c.entered as f64 / c.samples.max(1) as f64)
+                .fold(0.0, f64::max);
+            let right = done
+                .iter()
+                .filter(|(r, _)| r.genus.is_some() && r.genus == r.gt_genus && r.components == 1)
+                .count();
+            writeln!(
+                s,
+                "| {n} | {m} | {} of {} | {wrong} ({wrong_shapes}) | {entered} ({entered_shapes}) | {worst:.2} | {right} |",
+                done.len(),
+                sel.len()
+            )?;
+        }
+    }
+    writeln!(s)?;
     Ok(())
 }
 

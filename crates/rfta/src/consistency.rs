@@ -1,0 +1,257 @@
+//! How a mesh agrees with every sample: the method's promise, measured.
+//!
+//! Reach for the Arcs (Sellán, Ren, Batty, Stein 2024, §3) asks for a surface that touches every
+//! sample sphere `B(p_i, |s_i|)` and enters none, with `p_i` outside where `s_i > 0` and inside
+//! where `s_i < 0`. [`measure`] checks each sample against a mesh, with tolerances in units of the
+//! sample spacing `h` (the grid spacing; for scattered samples the mean distance from a sample to
+//! its nearest other sample):
+//!
+//! - a **sign error**: `|s_i| > 0.01 h` and the generalized winding number of the mesh puts `p_i`
+//!   on the other side;
+//! - an **entered sphere**: the distance `d_i` from `p_i` to the mesh is below `|s_i| - 0.1 h`;
+//! - a **gap**: `d_i > |s_i| + 0.25 h`, the surface is farther than the sample says.
+//!
+//! A clamped sample (`|s_i|` at or beyond the clamp) says only that the surface is at least that
+//! far: it can be entered or on the wrong side, never have a gap. The same function scores the
+//! pipeline's output ([`crate::Report::consistency`]) and any other method's mesh (`cargo xtask
+//! eval`), so the numbers compare.
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use rfta_geom::glam::DVec3;
+use rfta_geom::{SdfSamples, TriMesh};
+use rfta_mesh::MeshIndex;
+
+#[cfg(doc)]
+use crate::Error;
+use crate::Result;
+
+/// A sign error needs `|s| > SIGN_MARGIN h`: samples closer to the surface than that carry no
+/// reliable side.
+pub const SIGN_MARGIN: f64 = 0.01;
+
+/// A sphere counts as entered when the mesh comes closer than `|s| - ENTER_MARGIN h`.
+pub const ENTER_MARGIN: f64 = 0.1;
+
+/// A gap is a mesh farther than `|s| + GAP_MARGIN h`.
+pub const GAP_MARGIN: f64 = 0.25;
+
+/// A nearest point with every barycentric coordinate above this lies inside its face, away from
+/// the edges where the face normal stops telling the side.
+const FACE_INTERIOR: f64 = 1e-6;
+
+/// What [`measure`] found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Consistency {
+    /// Samples checked.
+    pub samples: usize,
+    /// The spacing `h` the margins are stated in (the samples' units).
+    pub spacing: f64,
+    /// Samples on the wrong side of the mesh (by winding number) with `|s| > 0.01 h`.
+    pub sign_errors: usize,
+    /// Samples whose sphere the mesh enters by more than `0.1 h`.
+    pub entered: usize,
+    /// Samples from which the mesh is more than `0.25 h` farther than their value.
+    pub gaps: usize,
+    /// The deepest entry into a sphere, `max_i (min(|s_i|, clamp) - d_i) / h` over all samples
+    /// (0 when the mesh enters none).
+    pub deepest_entry: f64,
+}
+
+impl Consistency {
+    /// No sign error and no entered sphere.
+    pub fn is_consistent(&self) -> bool {
+        self.sign_errors == 0 && self.entered == 0
+    }
+}
+
+/// The sample spacing the margins use: the grid spacing (largest axis), or for scattered samples
+/// the mean distance from a sample to its nearest other sample.
+pub fn spacing(samples: &SdfSamples) -> f64 {
+    if let Some(g) = samples.as_grid() {
+        return g.spacing().max_element();
+    }
+    let positions = samples.positions();
+    if positions.len() < 2 {
+        return 0.0;
+    }
+    let coords: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
+    let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
+        return 0.0;
+    };
+    let two = std::num::NonZeroUsize::MIN.saturating_add(1);
+    // The two nearest are the sample itself and its nearest other sample.
+    let nearest: Vec<f64> = coords
+        .par_iter()
+        .map(|q| {
+            tree.query(q)
+                .nearest_n::<SquaredEuclidean<f64>>(two)
+                .execute()
+                .iter()
+                .map(|n| n.distance)
+                .fold(0.0, f64::max)
+                .sqrt()
+        })
+        .collect();
+    // Summed in order: the same bits at any thread count.
+    let total: f64 = nearest.iter().sum();
+    total / positions.len() as f64
+}
+
+/// Checks `mesh` against every sample (see the module documentation); `clamp` is the magnitude at
+/// and beyond which values are clamped (`None`: none are). The result does not depend on the
+/// thread count.
+///
+/// # Errors
+/// [`Error::Consistency`] if the mesh cannot be indexed (no faces, non-finite vertices).
+pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Result<Consistency> {
+    let h = spacing(samples);
+    let clamp = clamp.unwrap_or(f64::INFINITY);
+    let positions = samples.positions();
+    let values = samples.values();
+    if mesh.faces.is_empty() {
+        // No surface: every negative sample is on the wrong side, every unclamped one has a gap.
+        return Ok(Consistency {
+            samples: positions.len(),
+            spacing: h,
+            sign_errors: values.iter().filter(|&&s| s < -SIGN_MARGIN * h).count(),
+            entered: 0,
+            gaps: values.iter().filter(|s| s.abs() < clamp).count(),
+            deepest_entry: 0.0,
+        });
+    }
+    let index = MeshIndex::new(mesh)?;
+    let topology = rfta_mesh::Topology::of(mesh);
+    let closed = topology.is_watertight() && topology.is_consistently_oriented();
+    let per_sample = |i: usize| -> [f64; 4] {
+        let (p, s): (DVec3, f64) = (positions[i], values[i]);
+        let r = s.abs();
+        // Nothing farther than the gap margin matters for the distances: the bound lets the
+        // search prune almost every box (the mesh is about |s| away).
+        let reach = r.min(clamp) + GAP_MARGIN * h;
+        let near = index.closest_point_within(p, reach * reach);
+        let d = near
+            .as_ref()
+            .map_or(f64::INFINITY, |c| c.distance_squared.sqrt());
+        let entry = r.min(clamp) - d;
+        let entered = entry > ENTER_MARGIN * h;
+        let gap = r < clamp && d > r + GAP_MARGIN * h;
+        let sign_error = r > SIGN_MARGIN * h && {
+            // On a closed, consistently oriented mesh whose nearest point lies inside a face,
+            // that face's normal tells the side exactly; elsewhere the winding number does.
+            let by_face = near.as_ref().filter(|c| {
+                closed
+                    && c.distance_squared > 0.0
+                    && c.barycentric.iter().all(|&b| b > FACE_INTERIOR)
+            });
+            let inside = match by_face {
+                Some(c) => (p - c.point).dot(mesh.face_normal_scaled(c.face as usize)) < 0.0,
+                None => index.winding_number(p) > 0.5,
+            };
+            inside != (s < 0.0)
+        };
+        [
+            f64::from(u8::from(sign_error)),
+            f64::from(u8::from(entered)),
+            f64::from(u8::from(gap)),
+            entry.max(0.0) / h.max(f64::MIN_POSITIVE),
+        ]
+    };
+    let found = (0..positions.len()).into_par_iter().map(per_sample).reduce(
+        || [0.0; 4],
+        |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3].max(b[3])],
+    );
+    Ok(Consistency {
+        samples: positions.len(),
+        spacing: h,
+        sign_errors: found[0] as usize,
+        entered: found[1] as usize,
+        gaps: found[2] as usize,
+        deepest_entry: found[3],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rfta_geom::{Grid, shapes};
+
+    /// The sphere of radius 0.5 sampled on 21^3 points of [-1, 1]^3 (h = 0.1).
+    fn ball_grid() -> SdfSamples {
+        let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+        let values = (0..grid.len())
+            .map(|i| grid.position(i).length() - 0.5)
+            .collect();
+        SdfSamples::grid(grid, values).expect("samples")
+    }
+
+    #[test]
+    fn the_true_surface_agrees_with_every_sample() {
+        let samples = ball_grid();
+        // Chord error of the 5-times subdivided icosphere: about 1e-4, far below the margins.
+        let c = measure(&samples, &shapes::icosphere(0.5, 5), None).expect("measure");
+        assert_eq!(c.samples, 21 * 21 * 21);
+        assert!((c.spacing - 0.1).abs() < 1e-12);
+        assert_eq!((c.sign_errors, c.entered, c.gaps), (0, 0, 0));
+        assert!(c.deepest_entry < 0.01, "{}", c.deepest_entry);
+        assert!(c.is_consistent());
+    }
+
+    /// A surface inflated by `e`: a sample at distance `t = |p|` from the centre is `|t - R|` from
+    /// it. Counted from that formula, with no sample within 5e-4 of a margin (checked) so the
+    /// tessellation cannot tip one.
+    #[test]
+    fn an_inflated_surface_is_counted_sample_by_sample() {
+        let samples = ball_grid();
+        let radius = 0.5 + 0.037;
+        let c = measure(&samples, &shapes::icosphere(radius, 5), None).expect("measure");
+        let h = 0.1;
+        let (mut wrong, mut entered, mut gaps) = (0, 0, 0);
+        for (p, &s) in samples.positions().iter().zip(samples.values()) {
+            let d = (p.length() - radius).abs();
+            let inside = p.length() < radius;
+            for edge in [
+                s.abs() - SIGN_MARGIN * h,
+                s.abs() - d - ENTER_MARGIN * h,
+                d - s.abs() - GAP_MARGIN * h,
+            ] {
+                assert!(edge.abs() > 5e-4, "sample {p} is on a margin");
+            }
+            wrong += usize::from(s.abs() > SIGN_MARGIN * h && inside != (s < 0.0));
+            entered += usize::from(d < s.abs() - ENTER_MARGIN * h);
+            gaps += usize::from(d > s.abs() + GAP_MARGIN * h);
+        }
+        // Outside samples are entered by 0.037 (more than 0.01), inside ones are 0.037 farther
+        // from the mesh than their value (more than 0.025), and samples between the two radii
+        // are inside the mesh with a positive value.
+        assert!(
+            entered > 1000 && gaps > 100 && wrong > 0,
+            "{entered} {gaps} {wrong}"
+        );
+        assert_eq!((c.sign_errors, c.entered, c.gaps), (wrong, entered, gaps));
+        assert!((c.deepest_entry - 0.37).abs() < 0.01, "{}", c.deepest_entry);
+    }
+
+    #[test]
+    fn no_surface_puts_every_inside_sample_on_the_wrong_side() {
+        let samples = ball_grid();
+        let c = measure(&samples, &TriMesh::default(), Some(0.8)).expect("measure");
+        let inside = samples.values().iter().filter(|&&s| s < -0.001).count();
+        let unclamped = samples.values().iter().filter(|s| s.abs() < 0.8).count();
+        assert_eq!((c.sign_errors, c.entered, c.gaps), (inside, 0, unclamped));
+    }
+
+    #[test]
+    fn scattered_samples_use_the_mean_nearest_neighbour_distance() {
+        // Two pairs 0.1 apart, the pairs 5 apart: every sample's nearest other sample is 0.1 away.
+        let positions = vec![
+            DVec3::ZERO,
+            DVec3::new(0.1, 0.0, 0.0),
+            DVec3::new(5.0, 0.0, 0.0),
+            DVec3::new(5.0, 0.1, 0.0),
+        ];
+        let samples =
+            SdfSamples::scattered(positions, vec![1.0, -1.0, 1.0, -1.0]).expect("samples");
+        assert!((spacing(&samples) - 0.1).abs() < 1e-12);
+    }
+}
