@@ -36,10 +36,6 @@ pub const ENTER_MARGIN: f64 = 0.1;
 /// A gap is a mesh farther than `|s| + GAP_MARGIN h`.
 pub const GAP_MARGIN: f64 = 0.25;
 
-/// A nearest point with every barycentric coordinate above this lies inside its face, away from
-/// the edges where the face normal stops telling the side.
-const FACE_INTERIOR: f64 = 1e-6;
-
 /// What [`measure`] found.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Consistency {
@@ -122,7 +118,9 @@ pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Resu
     }
     let index = MeshIndex::new(mesh)?;
     let topology = rfta_mesh::Topology::of(mesh);
-    let closed = topology.is_watertight() && topology.is_consistently_oriented();
+    let normals =
+        (topology.is_watertight() && topology.is_manifold() && topology.is_consistently_oriented())
+            .then(|| Pseudonormals::of(mesh));
     let per_sample = |i: usize| -> [f64; 4] {
         let (p, s): (DVec3, f64) = (positions[i], values[i]);
         let r = s.abs();
@@ -137,17 +135,16 @@ pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Resu
         let entered = entry > ENTER_MARGIN * h;
         let gap = r < clamp && d > r + GAP_MARGIN * h;
         let sign_error = r > SIGN_MARGIN * h && {
-            // On a closed, consistently oriented mesh whose nearest point lies inside a face,
-            // that face's normal tells the side exactly; elsewhere the winding number does.
-            let by_face = near.as_ref().filter(|c| {
-                closed
-                    && c.distance_squared > 0.0
-                    && c.barycentric.iter().all(|&b| b > FACE_INTERIOR)
-            });
-            let inside = match by_face {
-                Some(c) => (p - c.point).dot(mesh.face_normal_scaled(c.face as usize)) < 0.0,
-                None => index.winding_number(p) > 0.5,
+            // On a closed, manifold, consistently oriented mesh the pseudonormal of the nearest
+            // feature tells the side exactly; elsewhere (or on the mesh) the winding number does.
+            let side = match (&normals, &near) {
+                (Some(n), Some(c)) if c.distance_squared > 0.0 => {
+                    let dot = (p - c.point).dot(n.at(mesh, c));
+                    (dot != 0.0).then_some(dot < 0.0)
+                }
+                _ => None,
             };
+            let inside = side.unwrap_or_else(|| index.winding_number(p) > 0.5);
             inside != (s < 0.0)
         };
         [
@@ -169,6 +166,67 @@ pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Resu
         gaps: found[2] as usize,
         deepest_entry: found[3],
     })
+}
+
+/// Angle-weighted pseudonormals of a closed mesh's vertices and edges (Bærentzen and Aanæs, "Signed
+/// distance computation using the angle weighted pseudonormal", IEEE TVCG 2005): the side of a
+/// point is the sign of `(p - c) . n`, with `c` its nearest point on the mesh and `n` the
+/// pseudonormal of the face, edge or vertex `c` lies on. Exact for closed, manifold, consistently
+/// oriented meshes; far cheaper than a winding number.
+struct Pseudonormals {
+    /// Unit normal of each face (zero for a face of zero area).
+    face: Vec<DVec3>,
+    /// Per vertex: the sum of its faces' unit normals weighted by the face's angle there.
+    vertex: Vec<DVec3>,
+    /// Per edge (smaller vertex index first): the sum of its two faces' unit normals.
+    edge: std::collections::HashMap<(u32, u32), DVec3>,
+}
+
+impl Pseudonormals {
+    fn of(mesh: &TriMesh) -> Self {
+        let face: Vec<DVec3> = (0..mesh.faces.len())
+            .map(|f| mesh.face_normal_scaled(f).normalize_or_zero())
+            .collect();
+        let mut vertex = vec![DVec3::ZERO; mesh.vertices.len()];
+        let mut edge = std::collections::HashMap::with_capacity(mesh.faces.len() * 3 / 2);
+        let p = |v: u32| mesh.vertices[v as usize];
+        for (f, ids) in mesh.faces.iter().enumerate() {
+            let n = face[f];
+            for k in 0..3 {
+                let (a, b, c) = (ids[k], ids[(k + 1) % 3], ids[(k + 2) % 3]);
+                let angle = (p(b) - p(a)).angle_between(p(c) - p(a));
+                if angle.is_finite() {
+                    vertex[a as usize] += angle * n;
+                }
+                *edge.entry((a.min(b), a.max(b))).or_insert(DVec3::ZERO) += n;
+            }
+        }
+        Self { face, vertex, edge }
+    }
+
+    /// The pseudonormal at a nearest point: the face's when it lies inside the face, the edge's
+    /// or the vertex's when one or two barycentric coordinates are zero (the nearest-point
+    /// kernel returns exact zeros there).
+    fn at(&self, mesh: &TriMesh, c: &rfta_mesh::ClosestPoint) -> DVec3 {
+        let ids = mesh.faces[c.face as usize];
+        let mut on = [0u32; 3];
+        let mut k = 0;
+        for (v, &b) in ids.iter().zip(&c.barycentric) {
+            if b != 0.0 {
+                on[k] = *v;
+                k += 1;
+            }
+        }
+        match k {
+            1 => self.vertex[on[0] as usize],
+            2 => self
+                .edge
+                .get(&(on[0].min(on[1]), on[0].max(on[1])))
+                .copied()
+                .unwrap_or(DVec3::ZERO),
+            _ => self.face[c.face as usize],
+        }
+    }
 }
 
 #[cfg(test)]
@@ -239,6 +297,42 @@ mod tests {
         let inside = samples.values().iter().filter(|&&s| s < -0.001).count();
         let unclamped = samples.values().iter().filter(|s| s.abs() < 0.8).count();
         assert_eq!((c.sign_errors, c.entered, c.gaps), (inside, 0, unclamped));
+    }
+
+    /// On closed meshes with sharp vertices and edges (a coarse torus, a cube), the pseudonormal
+    /// of the nearest feature and the winding number agree on the side of every query point.
+    #[test]
+    fn pseudonormals_tell_the_side_as_the_winding_number_does() {
+        let mut rng = rfta_geom::rng::Rng::new(3);
+        for mesh in [
+            shapes::torus(0.6, 0.25, 9, 5),
+            shapes::cuboid(DVec3::new(0.5, 0.3, 0.2)),
+            shapes::octahedron(0.7),
+        ] {
+            let index = MeshIndex::new(&mesh).expect("index");
+            let normals = Pseudonormals::of(&mesh);
+            let (mut features, mut checked) = ([0usize; 4], 0);
+            for _ in 0..4000 {
+                let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.2
+                    - DVec3::splat(1.1);
+                let c = index.closest_point(p);
+                let nonzero = c.barycentric.iter().filter(|&&b| b != 0.0).count();
+                features[nonzero] += 1;
+                let w = index.winding_number_exact(p);
+                if c.distance_squared < 1e-12 || (w - 0.5).abs() < 0.25 {
+                    continue;
+                }
+                let by_normal = (p - c.point).dot(normals.at(&mesh, &c)) < 0.0;
+                assert_eq!(by_normal, w > 0.5, "{p} (winding {w})");
+                checked += 1;
+            }
+            // Vertices, edges and faces were all nearest features.
+            assert!(
+                features[1] > 50 && features[2] > 50 && features[3] > 50,
+                "{features:?}"
+            );
+            assert!(checked > 3900, "{checked}");
+        }
     }
 
     #[test]

@@ -119,11 +119,11 @@ const PUSH_PASSES: usize = 8;
 /// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners,
 /// thin parts). Each vertex inside some sphere by more than `depth` (unit box) moves radially onto
 /// the boundary of the sphere it is deepest in, up to [`PUSH_PASSES`] times; the connectivity
-/// stays. Each vertex moves on its own, so the result does not depend on the thread count.
-/// Returns how many vertices moved.
+/// stays, and a move that would turn a face over is undone. Each vertex moves on its own, so the
+/// result does not depend on the thread count. Returns how many vertices moved.
 fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, depth: f64) -> usize {
     use rayon::prelude::*;
-    let moved: Vec<Option<DVec3>> = mesh
+    let moved_to: Vec<Option<DVec3>> = mesh
         .vertices
         .par_iter()
         .map_init(Vec::new, |hits, &v| {
@@ -145,14 +145,36 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
             moved.then(|| unit.to_input(p))
         })
         .collect();
-    let mut count = 0;
-    for (v, m) in mesh.vertices.iter_mut().zip(moved) {
+    // Moving a vertex must not fold the surface: where a face turns over (its normal against the
+    // one it had), its moved vertices go back, until no face is turned.
+    let before = mesh.clone();
+    let mut moved: Vec<bool> = moved_to.iter().map(Option::is_some).collect();
+    for (v, m) in mesh.vertices.iter_mut().zip(&moved_to) {
         if let Some(p) = m {
-            *v = p;
-            count += 1;
+            *v = *p;
         }
     }
-    count
+    loop {
+        let turned: Vec<usize> = (0..mesh.faces.len())
+            .filter(|&f| {
+                mesh.faces[f].iter().any(|&v| moved[v as usize])
+                    && before.face_normal_scaled(f).dot(mesh.face_normal_scaled(f)) <= 0.0
+            })
+            .collect();
+        if turned.is_empty() {
+            break;
+        }
+        for f in turned {
+            for v in mesh.faces[f] {
+                let v = v as usize;
+                if moved[v] {
+                    moved[v] = false;
+                    mesh.vertices[v] = before.vertices[v];
+                }
+            }
+        }
+    }
+    moved.iter().filter(|&&m| m).count()
 }
 
 /// Why a component of the mesh goes.
