@@ -11,7 +11,7 @@ use super::Row;
 /// Reference metrics by (shape, n, our method name): (chamfer, hausdorff, e_sdf, cpu seconds).
 pub(crate) type Reference = HashMap<(String, usize, String), (f64, f64, f64, f64)>;
 
-/// Reads `reference/gpytoolbox.csv` if present (methods `mc`, `rfta`, `rfta_paper`).
+/// Reads `reference/gpytoolbox.csv` if present (methods `mc`, `rfta`, `rfta_paper`, `dcsdd`).
 pub(crate) fn read_reference(path: &Path) -> Reference {
     let mut map = Reference::new();
     let Ok(text) = std::fs::read_to_string(path) else {
@@ -160,7 +160,7 @@ pub(crate) fn write_markdown(
     )?;
     writeln!(
         s,
-        "Metrics as the paper defines them (`rfta-metrics`); reference columns are the shared data's results (libigl marching cubes, gpytoolbox `reach_for_the_arcs`) on the same inputs.\n"
+        "Metrics as the paper defines them (`rfta-metrics`); reference columns are the shared data's results (libigl marching cubes, gpytoolbox `reach_for_the_arcs`, and gpytoolbox's `dual_contouring_of_signed_distance_data`, the authors' newer method, as `dcsdd`) on the same inputs.\n"
     )?;
     type Subset = (&'static str, fn(&Row) -> bool);
     let subsets: [Subset; 3] = [
@@ -190,6 +190,9 @@ pub(crate) fn write_markdown(
                 write!(head, " {m} | reference {} |", reference_method(m))?;
                 rule.push_str("---|---|");
             }
+            // The authors' newer method, from the shared reference results only.
+            head.push_str(" reference dcsdd |");
+            rule.push_str("---|");
             writeln!(s, "{head}\n{rule}")?;
             for &n in res {
                 let mut line = format!("| {n} |");
@@ -211,6 +214,19 @@ pub(crate) fn write_markdown(
                         fmt(theirs, sel.len())
                     )?;
                 }
+                let mut shapes: Vec<&str> = rows
+                    .iter()
+                    .filter(|r| r.n == n && keep(r))
+                    .map(|r| r.shape.as_str())
+                    .collect();
+                shapes.sort_unstable();
+                shapes.dedup();
+                let dcsdd = mean(shapes.iter().filter_map(|shape| {
+                    reference
+                        .get(&(shape.to_string(), n, "dcsdd".to_string()))
+                        .map(ref_pick)
+                }));
+                write!(line, " {} |", fmt(dcsdd, shapes.len()))?;
                 writeln!(s, "{line}")?;
             }
             writeln!(s)?;
