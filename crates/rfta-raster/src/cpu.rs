@@ -105,6 +105,14 @@ impl Level {
         self.res.div_ceil(self.size)
     }
 
+    /// The superblocks over these units: [`SUPER`] of them per side.
+    fn supers(self) -> Level {
+        Level {
+            size: self.size * SUPER,
+            ..self
+        }
+    }
+
     /// Lattice steps per unit (a power of two).
     fn span(self) -> i64 {
         (self.size * SUBCELLS) as i64
@@ -167,10 +175,7 @@ pub(crate) fn occupancy(spheres: &[QSphere], params: &RasterParams) -> BitGrid {
     let res = params.res as u32;
     let seed = seed32(params.seed);
     let blocks = Level { size: BLOCK, res };
-    let supers = Level {
-        size: BLOCK * SUPER,
-        res,
-    };
+    let supers = blocks.supers();
     let held_super = Bits::new(supers.n() as usize);
     spheres
         .par_iter()
@@ -230,11 +235,8 @@ fn hold_blocks(s: &QSphere, blocks: Level, held_super: &Bits, held: &Bits) {
     if empty(s) {
         return;
     }
-    let supers = Level {
-        size: blocks.size * SUPER,
-        ..blocks
-    };
-    let (sz_lo, sz_hi) = (s.lo[2] / supers.size, s.hi[2] / supers.size);
+    let supers = blocks.supers();
+    let (sz_lo, sz_hi) = supers.range(s, 2).into_inner();
     for sx in supers.range(s, 0) {
         for sy in supers.range(s, 1) {
             let Some((lo, hi)) = supers.reach_run(s, sx, sy, sz_lo, sz_hi) else {
@@ -307,12 +309,9 @@ fn rasterize_open(s: &QSphere, blocks: Level, seed: u32, open: &Bits, held: &Bit
     if empty(s) {
         return;
     }
-    let supers = Level {
-        size: blocks.size * SUPER,
-        ..blocks
-    };
-    let (sz_lo, sz_hi) = (s.lo[2] / supers.size, s.hi[2] / supers.size);
-    let (bz_lo, bz_hi) = (s.lo[2] / blocks.size, s.hi[2] / blocks.size);
+    let supers = blocks.supers();
+    let (sz_lo, sz_hi) = supers.range(s, 2).into_inner();
+    let (bz_lo, bz_hi) = blocks.range(s, 2).into_inner();
     for sx in supers.range(s, 0) {
         for sy in supers.range(s, 1) {
             let Some((lo, hi)) = supers.reach_run(s, sx, sy, sz_lo, sz_hi) else {
