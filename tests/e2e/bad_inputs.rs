@@ -132,9 +132,20 @@ fn corpus_cases_end_where_documented() {
         ),
         "{e}"
     );
-    for name in ["all_positive.npy", "all_negative.npy", "all_zero.npy"] {
-        let e = invalid(name);
-        assert!(matches!(e, GeomError::NoSignChange { .. }), "{name}: {e}");
+    let e = invalid("all_zero.npy");
+    assert!(
+        matches!(e, GeomError::NoSignChange { .. }),
+        "all_zero.npy: {e}"
+    );
+    // One sign is valid input; these spheres (|s| + 0.1 on a spacing of 1/6) cover the box.
+    for (name, side) in [
+        ("all_positive.npy", "positive (outside)"),
+        ("all_negative.npy", "negative (inside)"),
+    ] {
+        match run(name) {
+            Outcome::Refused(rfta::Error::NoSurface { sign, .. }) => assert_eq!(sign, side),
+            other => panic!("{name}: {other:?}"),
+        }
     }
     for name in ["random.npy", "occupancy.npy", "scaled.npy", "huge.npy"] {
         match run(name) {

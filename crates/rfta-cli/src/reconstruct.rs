@@ -270,8 +270,20 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         Err(e) => return Err(e.into()),
     };
     let t = Instant::now();
-    let out = run_pipeline(&samples, &params, ui)
-        .with_context(|| format!("{}: reconstruction failed", args.input.display()))?;
+    let out = match run_pipeline(&samples, &params, ui) {
+        Err(e) if matches!(e.downcast_ref(), Some(rfta::Error::NoSurface { .. })) => {
+            write(&args.output, &TriMesh::default(), ui)?;
+            return Err(NoSurface(format!(
+                "{}: {e}; wrote an empty mesh to {}",
+                args.input.display(),
+                args.output.display()
+            ))
+            .into());
+        }
+        other => {
+            other.with_context(|| format!("{}: reconstruction failed", args.input.display()))?
+        }
+    };
     describe(&out, ui, t.elapsed().as_secs_f64());
     write(&args.output, &out.mesh, ui)?;
     if let Some(path) = &args.points {

@@ -48,15 +48,14 @@ pub enum Error {
         /// How many are needed.
         needed: usize,
     },
-    /// Every SDF value has the same sign, so there is no surface to reconstruct.
+    /// Every SDF value is zero, so the samples say nothing of either side of a surface.
     #[error(
         "no sign change: all {n} SDF values are {sign} (min {min}, max {max}), so the samples describe no surface"
     )]
     NoSignChange {
         /// Number of samples.
         n: usize,
-        /// Which: "positive (outside)", "negative (inside)", "zero", or "positive (outside) or
-        /// zero, none negative (inside)".
+        /// Which: "zero" (samples of one sign are accepted; see `SdfSamples::grid`).
         sign: &'static str,
         /// Smallest value.
         min: f64,

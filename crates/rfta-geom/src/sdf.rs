@@ -224,7 +224,7 @@ impl SdfSamples {
     /// # Errors
     /// [`Error::LengthMismatch`] if the lengths differ, [`Error::TooFewSamples`] for fewer than two,
     /// [`Error::NonFiniteValue`] or [`Error::NonFinitePosition`] naming the first bad sample,
-    /// [`Error::NoSignChange`] when no value is negative, or every value is,
+    /// [`Error::NoSignChange`] when every value is zero,
     /// [`Error::ConflictingSamples`] when two samples share a position but not a value (exact
     /// duplicates are accepted).
     pub fn scattered(positions: Vec<DVec3>, values: Vec<f64>) -> Result<Self> {
@@ -360,21 +360,15 @@ fn validate_values(values: &[f64]) -> Result<()> {
         return Err(Error::NonFiniteValue { index, value });
     }
     let b = SignBalance::of(values);
-    // An inside needs a negative sample; an outside a positive or zero one.
-    if b.negative == 0 || b.positive + b.zero == 0 {
-        let min = values.iter().copied().fold(f64::INFINITY, f64::min);
-        let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let sign = match (b.negative, b.zero, b.positive) {
-            (0, 0, _) => "positive (outside)",
-            (0, _, 0) => "zero",
-            (0, _, _) => "positive (outside) or zero, none negative (inside)",
-            _ => "negative (inside)",
-        };
+    // Samples of one sign can still describe a surface: a thin shape between grid points has
+    // no sample inside it, and its spheres leave the room where it is empty (Sellán et al. 2024
+    // reconstruct such inputs). Only values that are all zero say nothing of either side.
+    if b.negative == 0 && b.positive == 0 {
         return Err(Error::NoSignChange {
             n: values.len(),
-            sign,
-            min,
-            max,
+            sign: "zero",
+            min: 0.0,
+            max: 0.0,
         });
     }
     Ok(())
@@ -420,23 +414,12 @@ mod tests {
             SdfSamples::grid(g, inf),
             Err(Error::NonFiniteValue { index: 3, .. })
         ));
-        assert!(matches!(
-            SdfSamples::grid(g, vec![0.5; 8]),
-            Err(Error::NoSignChange { n: 8, .. })
-        ));
-        assert!(matches!(
-            SdfSamples::grid(g, vec![-0.5; 8]),
-            Err(Error::NoSignChange { .. })
-        ));
-        // A zero value lies on the surface: accepted next to a negative one, but without one
-        // there is no inside.
+        // One sign can still describe a thin shape between the samples; the pipeline decides
+        // whether their spheres leave room for one.
+        assert!(SdfSamples::grid(g, vec![0.5; 8]).is_ok());
+        assert!(SdfSamples::grid(g, vec![-0.5; 8]).is_ok());
         let mut zero = vec![0.5; 8];
         zero[0] = 0.0;
-        assert!(matches!(
-            SdfSamples::grid(g, zero.clone()),
-            Err(Error::NoSignChange { .. })
-        ));
-        zero[1] = -0.5;
         assert!(SdfSamples::grid(g, zero).is_ok());
         assert!(matches!(
             SdfSamples::grid(g, vec![0.0; 8]),

@@ -80,6 +80,16 @@ pub(crate) fn initial_points(
     report
         .timings
         .push(("initial points".into(), t.elapsed() - raster_time));
+    if cloud.len() < 3 && (neg.is_empty() || pos.is_empty()) {
+        return Err(Error::NoSurface {
+            samples: n,
+            sign: if neg.is_empty() {
+                "positive (outside)"
+            } else {
+                "negative (inside)"
+            },
+        });
+    }
     if cloud.len() < 3 {
         return Err(Error::TooFewPoints {
             feasible: cloud.len(),

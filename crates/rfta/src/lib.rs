@@ -82,6 +82,17 @@ pub enum Error {
         /// Spheres (samples).
         spheres: usize,
     },
+    /// Every sample has one sign and their spheres leave no empty space of that sign's side
+    /// where a surface could be: the samples describe no surface.
+    #[error(
+        "all {samples} samples are {sign} and their spheres leave no empty space where a surface could be: the samples describe no surface"
+    )]
+    NoSurface {
+        /// Samples given.
+        samples: usize,
+        /// "positive (outside)" or "negative (inside)" (zeros count with the positive ones).
+        sign: &'static str,
+    },
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParams(String),
@@ -133,7 +144,8 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// # Errors
 /// [`Error::InvalidParams`], [`Error::TooLarge`] above [`Params::memory_limit`],
 /// [`Error::NotADistance`] when [`Params::check`] finds the values are not a distance,
-/// [`Error::TooFewPoints`] when fewer than 3 spheres admit a tangency point, [`Error::Raster`],
+/// [`Error::TooFewPoints`] when fewer than 3 spheres admit a tangency point, [`Error::NoSurface`]
+/// when the samples all have one sign and their spheres cover the space, [`Error::Raster`],
 /// [`Error::Spsr`] when the final solve fails, [`Error::ThreadPool`], [`Error::NonFiniteOutput`].
 pub fn reconstruct(samples: &SdfSamples, params: &Params) -> Result<Reconstruction> {
     reconstruct_with_progress(samples, params, &mut |_| {})
