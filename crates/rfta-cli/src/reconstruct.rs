@@ -258,27 +258,13 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         Err(rfta_io::Error::Geom {
             source: source @ rfta::geom::Error::NoSignChange { .. },
             ..
-        }) => {
-            write(&args.output, &TriMesh::default(), ui)?;
-            return Err(NoSurface(format!(
-                "{}: {source}; wrote an empty mesh to {}",
-                args.input.display(),
-                args.output.display()
-            ))
-            .into());
-        }
+        }) => return no_surface(&args, &source, ui),
         Err(e) => return Err(e.into()),
     };
     let t = Instant::now();
     let out = match run_pipeline(&samples, &params, ui) {
         Err(e) if matches!(e.downcast_ref(), Some(rfta::Error::NoSurface { .. })) => {
-            write(&args.output, &TriMesh::default(), ui)?;
-            return Err(NoSurface(format!(
-                "{}: {e}; wrote an empty mesh to {}",
-                args.input.display(),
-                args.output.display()
-            ))
-            .into());
+            return no_surface(&args, &e, ui);
         }
         other => {
             other.with_context(|| format!("{}: reconstruction failed", args.input.display()))?
@@ -298,6 +284,18 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The input describes no surface: an empty mesh is written, and the reason returned as
+/// [`NoSurface`] (exit status 3).
+fn no_surface(args: &Args, why: &dyn std::fmt::Display, ui: &Ui) -> Result<()> {
+    write(&args.output, &TriMesh::default(), ui)?;
+    Err(NoSurface(format!(
+        "{}: {why}; wrote an empty mesh to {}",
+        args.input.display(),
+        args.output.display()
+    ))
+    .into())
 }
 
 fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
