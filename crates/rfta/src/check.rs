@@ -250,15 +250,14 @@ pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report
     Ok(())
 }
 
-/// Refuses non-finite vertices and reports degenerate faces and topology.
-pub(crate) fn mesh(mesh: &TriMesh) -> Result<MeshCheck> {
+/// Refuses non-finite vertices and reports degenerate faces and `topo`, the mesh's topology.
+pub(crate) fn mesh(mesh: &TriMesh, topo: &rfta_mesh::Topology) -> Result<MeshCheck> {
     if let Some(i) = mesh.vertices.iter().position(|v| !v.is_finite()) {
         return Err(Error::NonFiniteOutput(i));
     }
     let zero_area_faces = (0..mesh.faces.len())
         .filter(|&f| mesh.face_normal_scaled(f).length_squared() == 0.0)
         .count();
-    let topo = rfta_mesh::Topology::of(mesh);
     Ok(MeshCheck {
         degenerate_faces: topo.degenerate_faces,
         zero_area_faces,

@@ -20,7 +20,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, TriMesh};
-use rfta_mesh::MeshIndex;
+use rfta_mesh::{MeshIndex, Topology};
 
 #[cfg(doc)]
 use crate::Error;
@@ -64,8 +64,8 @@ impl Consistency {
 /// The sample spacing the margins use: the grid spacing (largest axis), or for scattered samples
 /// the mean distance from a sample to its nearest other sample.
 pub fn spacing(samples: &SdfSamples) -> f64 {
-    if let Some(g) = samples.as_grid() {
-        return g.spacing().max_element();
+    if samples.as_grid().is_some() {
+        return crate::normalize::sample_spacing(samples);
     }
     let positions = samples.positions();
     if positions.len() < 2 {
@@ -101,6 +101,17 @@ pub fn spacing(samples: &SdfSamples) -> f64 {
 /// # Errors
 /// [`Error::Consistency`] if the mesh cannot be indexed (no faces, non-finite vertices).
 pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Result<Consistency> {
+    measure_with(samples, mesh, &Topology::of(mesh), clamp)
+}
+
+/// [`measure`] with the mesh's topology already at hand (the pipeline computes it once for its
+/// mesh check and this).
+pub(crate) fn measure_with(
+    samples: &SdfSamples,
+    mesh: &TriMesh,
+    topology: &Topology,
+    clamp: Option<f64>,
+) -> Result<Consistency> {
     let h = spacing(samples);
     let clamp = clamp.unwrap_or(f64::INFINITY);
     let positions = samples.positions();
@@ -117,7 +128,6 @@ pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Resu
         });
     }
     let index = MeshIndex::new(mesh)?;
-    let topology = rfta_mesh::Topology::of(mesh);
     let normals =
         (topology.is_watertight() && topology.is_manifold() && topology.is_consistently_oriented())
             .then(|| Pseudonormals::of(mesh));

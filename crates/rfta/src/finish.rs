@@ -57,9 +57,10 @@ pub(crate) fn finish(
     report.vertices_pushed_out =
         push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
     report.timings.push(("spheres cleared".into(), t.elapsed()));
-    report.mesh = check::mesh(&mesh)?;
+    let topology = rfta_mesh::Topology::of(&mesh);
+    report.mesh = check::mesh(&mesh, &topology)?;
     let t = Instant::now();
-    report.consistency = consistency::measure(samples, &mesh, report.clamp)?;
+    report.consistency = consistency::measure_with(samples, &mesh, &topology, report.clamp)?;
     report
         .timings
         .push(("consistency check".into(), t.elapsed()));
@@ -147,7 +148,10 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
         .collect();
     // Moving a vertex must not fold the surface: where a face turns over (its normal against the
     // one it had), its moved vertices go back, until no face is turned.
-    let before = mesh.clone();
+    let original = mesh.vertices.clone();
+    let normals: Vec<DVec3> = (0..mesh.faces.len())
+        .map(|f| mesh.face_normal_scaled(f))
+        .collect();
     let mut moved: Vec<bool> = moved_to.iter().map(Option::is_some).collect();
     for (v, m) in mesh.vertices.iter_mut().zip(&moved_to) {
         if let Some(p) = m {
@@ -158,7 +162,7 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
         let turned: Vec<usize> = (0..mesh.faces.len())
             .filter(|&f| {
                 mesh.faces[f].iter().any(|&v| moved[v as usize])
-                    && before.face_normal_scaled(f).dot(mesh.face_normal_scaled(f)) <= 0.0
+                    && normals[f].dot(mesh.face_normal_scaled(f)) <= 0.0
             })
             .collect();
         if turned.is_empty() {
@@ -169,7 +173,7 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
                 let v = v as usize;
                 if moved[v] {
                     moved[v] = false;
-                    mesh.vertices[v] = before.vertices[v];
+                    mesh.vertices[v] = original[v];
                 }
             }
         }
