@@ -37,7 +37,11 @@ pub(crate) fn finish(
     report.far_spheres = unit.far_spheres(params);
     report.spheres_without_point = n.saturating_sub(owners.len() + report.far_spheres);
     mesh.map_vertices(|v| unit.to_input(v));
+    // Every sphere's tree: the rounds' when they built one, else built on first use.
     let tree = OnceLock::new();
+    if let Some(all) = rounds.all {
+        let _ = tree.set(all);
+    }
     let (kept, removed) = remove_islands(&mesh, |faces, bounds| {
         judge(unit, params, &tree, &mesh, faces, bounds)
     });

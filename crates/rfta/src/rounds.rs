@@ -20,6 +20,9 @@ pub(crate) struct Rounds {
     /// The screened Poisson setting of the solves inside the rounds.
     pub(crate) spsr: SpsrParams,
     feasible: rfta_feasible::Params,
+    /// The tree of every sphere, when every round tests against all of them (no batching); the
+    /// final stage reuses it.
+    pub(crate) all: Option<SphereTree>,
 }
 
 impl Rounds {
@@ -28,6 +31,7 @@ impl Rounds {
             cloud,
             spsr: params.round_spsr_params(Some(unit.spacing())),
             feasible: params.feasible_params(unit.len(), unit.owner_radius(params)),
+            all: None,
         }
     }
 
@@ -43,9 +47,9 @@ impl Rounds {
         let n = unit.len();
         report.spsr_depth = self.spsr.depth;
         // Without batching every round tests against the same tree: built once.
-        let all = params
-            .batch_holds_all(n)
-            .then(|| SphereTree::new(&unit.spheres));
+        if params.rounds > 0 && params.batch_holds_all(n) {
+            self.all = Some(SphereTree::new(&unit.spheres));
+        }
         for round in 1..=params.rounds {
             progress(Stage::FineTune {
                 round,
@@ -54,7 +58,7 @@ impl Rounds {
             report.points_per_round.push(self.cloud.len());
             let t = Instant::now();
             let batch;
-            let tree = match &all {
+            let tree = match &self.all {
                 Some(t) => t,
                 None => {
                     batch = SphereTree::batch(
@@ -78,7 +82,7 @@ impl Rounds {
             let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
             // tested against this same set last round.
-            let cloud_feasible = round > 1 && all.is_some();
+            let cloud_feasible = round > 1 && self.all.is_some();
             let next = counted(n, progress, |done| {
                 rfta_feasible::fine_tune_counted(
                     &unit.spheres,
