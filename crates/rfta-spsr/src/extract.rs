@@ -328,48 +328,52 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
     // or a face with them (their boundary may be cut by the finer leaf's corners).
     let mut cand: Vec<(u32, u32)> = levels
         .par_iter()
-        .flat_map_iter(|level| {
+        .flat_map(|level| {
             let d = level.depth;
             let vals = &values[d as usize];
-            let mut out = Vec::new();
-            for (ci, corners) in level.corners.iter().enumerate() {
-                if level.refined[ci] {
-                    continue;
-                }
-                let first = inside(vals[corners[0] as usize]);
-                if corners.iter().all(|&k| inside(vals[k as usize]) == first) {
-                    continue;
-                }
-                out.push((d, ci as u32));
-                let c = crate::keys::demorton(level.cells[ci]);
-                let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
-                let n = 1i64 << d;
-                for o in 0..27 {
-                    let off = [
-                        (o % 3) as i64 - 1,
-                        ((o / 3) % 3) as i64 - 1,
-                        (o / 9) as i64 - 1,
-                    ];
-                    let nz = off.iter().filter(|&&v| v != 0).count();
-                    if nz == 0 || nz == 3 {
-                        continue;
+            (0..level.cells.len())
+                .into_par_iter()
+                .with_min_len(crate::solve::GRAIN)
+                .flat_map_iter(move |ci| {
+                    let mut out = Vec::new();
+                    let corners = &level.corners[ci];
+                    if level.refined[ci] {
+                        return out;
                     }
-                    let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
-                    if k.iter().any(|&v| v < 0 || v >= n) || level.cell(k).is_some() {
-                        continue;
+                    let first = inside(vals[corners[0] as usize]);
+                    if corners.iter().all(|&k| inside(vals[k as usize]) == first) {
+                        return out;
                     }
-                    let mut dd = d;
-                    while dd > 0 {
-                        dd -= 1;
-                        k = k.map(|v| v >> 1);
-                        if let Some(i) = levels[dd as usize].cell(k) {
-                            out.push((dd, i));
-                            break;
+                    out.push((d, ci as u32));
+                    let c = crate::keys::demorton(level.cells[ci]);
+                    let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+                    let n = 1i64 << d;
+                    for o in 0..27 {
+                        let off = [
+                            (o % 3) as i64 - 1,
+                            ((o / 3) % 3) as i64 - 1,
+                            (o / 9) as i64 - 1,
+                        ];
+                        let nz = off.iter().filter(|&&v| v != 0).count();
+                        if nz == 0 || nz == 3 {
+                            continue;
+                        }
+                        let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
+                        if k.iter().any(|&v| v < 0 || v >= n) || level.cell(k).is_some() {
+                            continue;
+                        }
+                        let mut dd = d;
+                        while dd > 0 {
+                            dd -= 1;
+                            k = k.map(|v| v >> 1);
+                            if let Some(i) = levels[dd as usize].cell(k) {
+                                out.push((dd, i));
+                                break;
+                            }
                         }
                     }
-                }
-            }
-            out
+                    out
+                })
         })
         .collect();
     cand.par_sort_unstable();
@@ -467,24 +471,32 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
     keys.par_sort_unstable_by_key(|v| v.0);
     keys.dedup_by_key(|v| v.0);
     let scale = 1.0 / f64::from(1u32 << depth);
-    let mut vertices: Vec<DVec3> = keys.iter().map(|v| v.1 * scale).collect();
-    let mut faces = Vec::new();
-    let mut broken_leaves = 0;
-    for (out, tris, centres) in &results {
-        broken_leaves += usize::from(out.broken);
-        let first_centre = vertices.len() as u32;
-        vertices.extend(centres.iter().map(|c| *c * scale));
-        for t in tris {
-            let f = t.map(|k| {
-                if k & CENTRE != 0 {
-                    first_centre + (k & !CENTRE) as u32
-                } else {
-                    keys.partition_point(|v| v.0 < k) as u32
-                }
-            });
-            faces.push(f);
-        }
+    // Centre vertices follow the edge vertices, leaf by leaf.
+    let mut first_centre = Vec::with_capacity(results.len());
+    let mut next = keys.len() as u32;
+    for (_, _, centres) in &results {
+        first_centre.push(next);
+        next += centres.len() as u32;
     }
+    let mut vertices: Vec<DVec3> = keys.par_iter().map(|v| v.1 * scale).collect();
+    vertices.extend(results.iter().flat_map(|r| r.2.iter().map(|c| *c * scale)));
+    let broken_leaves = results.iter().filter(|r| r.0.broken).count();
+    let faces: Vec<[u32; 3]> = results
+        .par_iter()
+        .zip(&first_centre)
+        .flat_map_iter(|((_, tris, _), &fc)| {
+            let keys = &keys;
+            tris.iter().map(move |t| {
+                t.map(|k| {
+                    if k & CENTRE != 0 {
+                        fc + (k & !CENTRE) as u32
+                    } else {
+                        keys.partition_point(|v| v.0 < k) as u32
+                    }
+                })
+            })
+        })
+        .collect();
     Extracted {
         vertices,
         faces,

@@ -16,8 +16,14 @@ use crate::tree::{Level, Sample, cell_of, corner, hats_in};
 use crate::{Boundary, SpsrParams};
 
 use crate::keys::NONE;
-/// Chunk length of parallel loops: fixed, so sums never depend on the thread count.
+/// Chunk length of parallel sums: fixed, so sums never depend on the thread count.
 const CHUNK: usize = 2048;
+
+/// Smallest piece a parallel loop is split into. Loops that write each element on its own give
+/// the same bits however they are split, so this only trades scheduling against balance: one
+/// colour of a depth-8 Gauss-Seidel sweep holds a few thousand nodes, which a grain of
+/// [`CHUNK`] would leave on one thread.
+pub(crate) const GRAIN: usize = 256;
 
 /// Offset `o` (0..27) of a 3x3x3 stencil as `[-1, 0, 1]` per axis.
 #[inline]
@@ -83,7 +89,7 @@ pub(crate) fn build_systems(
 ) -> Vec<LevelSystem> {
     let depth = levels.len() as u32 - 1;
     levels
-        .iter()
+        .par_iter()
         .map(|level| {
             let d = level.depth;
             let n = level.n();
@@ -183,7 +189,7 @@ pub(crate) fn build_systems(
 pub(crate) fn neighbor_table(level: &Level) -> Vec<u32> {
     let mut out = vec![NONE; level.nodes.len() * 27];
     out.par_chunks_mut(27)
-        .with_min_len(CHUNK)
+        .with_min_len(GRAIN)
         .zip(&level.nodes)
         .for_each(|(o, &c)| o.copy_from_slice(&level.node_index.block27(ic(c))));
     out
@@ -193,7 +199,7 @@ pub(crate) fn neighbor_table(level: &Level) -> Vec<u32> {
 pub(crate) fn parent_table(fine: &Level, coarse: &Level) -> Vec<u32> {
     let mut out = vec![NONE; fine.nodes.len() * 27];
     out.par_chunks_mut(27)
-        .with_min_len(CHUNK)
+        .with_min_len(GRAIN)
         .zip(&fine.nodes)
         .for_each(|(o, &c)| {
             let p = [
@@ -211,51 +217,60 @@ pub(crate) fn parent_table(fine: &Level, coarse: &Level) -> Vec<u32> {
 /// of `V` in that depth's hat basis (divided by the cell volume so that `V` integrates to the
 /// sample's area times its normal).
 pub(crate) fn splat_normals(levels: &[Level], samples: &[Sample]) -> Vec<Vec<DVec3>> {
-    let depth = levels.len() as u32 - 1;
-    let mut v: Vec<Vec<DVec3>> = levels
-        .iter()
-        .map(|l| vec![DVec3::ZERO; l.nodes.len()])
-        .collect();
-    for s in samples {
-        let d0 = s.depth.floor() as u32;
-        let t = s.depth - f64::from(d0);
-        let normal = -s.normal * (s.area / s.weight);
-        for (d, w) in [(d0, 1.0 - t), (d0 + 1, t)] {
-            if w <= 0.0 || d > depth {
-                continue;
-            }
-            let level = &levels[d as usize];
+    // One depth per task: a depth's coefficients receive the samples in their order, as a single
+    // pass over the samples would add them.
+    levels
+        .par_iter()
+        .map(|level| {
+            let d = level.depth;
+            let mut v = vec![DVec3::ZERO; level.nodes.len()];
             let nf = f64::from(1u32 << d);
             let inv_vol = nf.powi(3);
-            // Quadratic B-spline weights of the three nearest nodes per axis: the normal field is
-            // the hat interpolation of a degree-2 kernel around the sample (as smooth as
-            // PoissonRecon's degree-2 normal splat; the weights sum to 1 so V keeps its integral).
-            let mut idx = [[0i64; 3]; 3];
-            let mut wts = [[0.0f64; 3]; 3];
-            for axis in 0..3 {
-                let x = s.pos[axis] * nf;
-                let r = x.round() as i64;
-                for (k, j) in (r - 1..=r + 1).enumerate() {
-                    idx[axis][k] = j;
-                    wts[axis][k] = quadratic_bspline(j as f64 - x);
+            for s in samples {
+                let d0 = s.depth.floor() as u32;
+                let t = s.depth - f64::from(d0);
+                let w = if d == d0 {
+                    1.0 - t
+                } else if d == d0 + 1 {
+                    t
+                } else {
+                    continue;
+                };
+                if w <= 0.0 {
+                    continue;
                 }
-            }
-            for (kz, &jz) in idx[2].iter().enumerate() {
-                for (ky, &jy) in idx[1].iter().enumerate() {
-                    for (kx, &jx) in idx[0].iter().enumerate() {
-                        let h = wts[0][kx] * wts[1][ky] * wts[2][kz];
-                        if h == 0.0 {
-                            continue;
-                        }
-                        if let Some(node) = level.node([jx, jy, jz]) {
-                            v[d as usize][node as usize] += normal * (w * h * inv_vol);
+                let normal = -s.normal * (s.area / s.weight);
+                // Quadratic B-spline weights of the three nearest nodes per axis: the normal
+                // field is the hat interpolation of a degree-2 kernel around the sample (as
+                // smooth as PoissonRecon's degree-2 normal splat; the weights sum to 1 so V keeps
+                // its integral).
+                let mut idx = [[0i64; 3]; 3];
+                let mut wts = [[0.0f64; 3]; 3];
+                for axis in 0..3 {
+                    let x = s.pos[axis] * nf;
+                    let r = x.round() as i64;
+                    for (k, j) in (r - 1..=r + 1).enumerate() {
+                        idx[axis][k] = j;
+                        wts[axis][k] = quadratic_bspline(j as f64 - x);
+                    }
+                }
+                for (kz, &jz) in idx[2].iter().enumerate() {
+                    for (ky, &jy) in idx[1].iter().enumerate() {
+                        for (kx, &jx) in idx[0].iter().enumerate() {
+                            let h = wts[0][kx] * wts[1][ky] * wts[2][kz];
+                            if h == 0.0 {
+                                continue;
+                            }
+                            if let Some(node) = level.node([jx, jy, jz]) {
+                                v[node as usize] += normal * (w * h * inv_vol);
+                            }
                         }
                     }
                 }
             }
-        }
-    }
-    v
+            v
+        })
+        .collect()
 }
 
 /// The centred quadratic B-spline (support `[-1.5, 1.5]`, integral 1).
@@ -276,7 +291,7 @@ fn apply_g(level: &Level, sys: &LevelSystem, nbr: &[u32], v: &[DVec3]) -> Vec<f6
     let t = &sys.tables.same;
     (0..level.nodes.len())
         .into_par_iter()
-        .with_min_len(CHUNK)
+        .with_min_len(GRAIN)
         .map(|i| {
             let c = level.nodes[i];
             let mut acc = 0.0;
@@ -368,7 +383,7 @@ where
 {
     (0..fine.nodes.len())
         .into_par_iter()
-        .with_min_len(CHUNK)
+        .with_min_len(GRAIN)
         .map(|i| {
             let (ps, m) = prolongation_parents(fine.nodes[i]);
             let mut acc = T::default();
@@ -459,7 +474,7 @@ fn apply_a(
         out.iter_mut().enumerate().for_each(|(i, o)| *o = row(i));
     } else {
         out.par_iter_mut()
-            .with_min_len(CHUNK)
+            .with_min_len(GRAIN)
             .enumerate()
             .for_each(|(i, o)| *o = row(i));
     }
@@ -568,18 +583,26 @@ fn gauss_seidel(
             (0..8).map(|k| s.hats[k] * x[corners[k] as usize]).sum()
         })
         .collect();
-    let mut old: Vec<f64> = Vec::new();
+    // One colour's new values, then (after the swap) its old ones.
+    let widest = (0..8)
+        .map(|c| level.colors[c + 1] - level.colors[c])
+        .max()
+        .unwrap_or(0);
+    let mut buf = vec![0.0; widest];
     for _ in 0..sweeps {
         for c in 0..8 {
             let (lo, hi) = (level.colors[c], level.colors[c + 1]);
             let xs: &[f64] = x;
             let fsr: &[f64] = &fs;
-            let updated: Vec<f64> = (lo..hi)
-                .into_par_iter()
-                .with_min_len(CHUNK)
-                .map(|i| {
+            buf[..hi - lo]
+                .par_iter_mut()
+                .with_min_len(GRAIN)
+                .enumerate()
+                .for_each(|(k, out)| {
+                    let i = lo + k;
                     if sys.fixed[i] {
-                        return 0.0;
+                        *out = 0.0;
+                        return;
                     }
                     let row = k_row(sys, level.nodes[i], n);
                     let nb = &nbr[i * 27..i * 27 + 27];
@@ -596,17 +619,14 @@ fn gauss_seidel(
                         let h = s.hats[(e & 7) as usize];
                         acc += s.weight * h * (fsr[(e >> 3) as usize] - h * xi);
                     }
-                    (r[i] - acc) / sys.diag[i]
-                })
-                .collect();
-            old.clear();
-            old.extend_from_slice(&x[lo..hi]);
-            x[lo..hi].copy_from_slice(&updated);
+                    *out = (r[i] - acc) / sys.diag[i];
+                });
+            x[lo..hi].swap_with_slice(&mut buf[..hi - lo]);
             // Cells see exactly one corner of each colour.
             let xs: &[f64] = x;
-            let old = &old;
+            let old = &buf;
             fs.par_iter_mut()
-                .with_min_len(CHUNK)
+                .with_min_len(GRAIN)
                 .zip(&sys.screen)
                 .for_each(|(f, s)| {
                     let corners = &level.corners[s.cell as usize];
@@ -619,6 +639,14 @@ fn gauss_seidel(
                 });
         }
     }
+}
+
+/// What the down pass computes for one depth on its own: the neighbour table, `∫ ∇B_d · V_d`, and
+/// the table of the parents one depth coarser.
+struct DownTerms {
+    nbr: Vec<u32>,
+    g: Vec<f64>,
+    parents: Option<Vec<u32>>,
 }
 
 /// Solution: per depth the coefficients `x_d` and the nodal values `U_d` of `Σ_{l ≤ d} χ_l`.
@@ -642,21 +670,47 @@ pub(crate) fn solve(
     let small = |d: usize| levels[d].nodes.len() <= KEEP_TABLES_BELOW;
     let mut kept_nbr: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
     let mut kept_parents: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
-    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l.
+    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l, that is each depth's own `∫ ∇B_d · V_d` plus the
+    // restriction of the finer depth's β. The own terms and the small depths' tables do not depend
+    // on each other and are built for all small depths at once; the big depths follow one at a
+    // time in the chain of restrictions.
+    let own: Vec<Option<DownTerms>> = (0..=depth)
+        .into_par_iter()
+        .map(|d| {
+            if !small(d) {
+                return None;
+            }
+            let nbr = neighbor_table(&levels[d]);
+            let g = apply_g(&levels[d], &systems[d], &nbr, &v[d]);
+            let parents = (d > 0).then(|| parent_table(&levels[d], &levels[d - 1]));
+            Some(DownTerms { nbr, g, parents })
+        })
+        .collect();
+    let mut own_g: Vec<Option<Vec<f64>>> = vec![None; depth + 1];
+    for (d, o) in own.into_iter().enumerate() {
+        if let Some(DownTerms { nbr, g, parents }) = o {
+            kept_nbr[d] = Some(nbr);
+            own_g[d] = Some(g);
+            kept_parents[d] = parents;
+        }
+    }
     let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
     for d in (0..=depth).rev() {
-        let nbr = neighbor_table(&levels[d]);
-        let mut b = apply_g(&levels[d], &systems[d], &nbr, &v[d]);
-        if small(d) {
-            kept_nbr[d] = Some(nbr);
-        }
+        let mut b = own_g[d].take().unwrap_or_else(|| {
+            let nbr = neighbor_table(&levels[d]);
+            apply_g(&levels[d], &systems[d], &nbr, &v[d])
+        });
         if d < depth {
-            let parents = parent_table(&levels[d + 1], &levels[d]);
-            let r = restrict(&levels[d], &levels[d + 1], &parents, &beta[d + 1]);
+            let built;
+            let parents = match &kept_parents[d + 1] {
+                Some(p) => p,
+                None => {
+                    built = parent_table(&levels[d + 1], &levels[d]);
+                    &built
+                }
+            };
+            let r = restrict(&levels[d], &levels[d + 1], parents, &beta[d + 1]);
             b.iter_mut().zip(&r).for_each(|(b, r)| *b += r);
-            if small(d + 1) {
-                kept_parents[d + 1] = Some(parents);
-            }
         }
         beta[d] = b;
     }
@@ -677,7 +731,7 @@ pub(crate) fn solve(
             let u_prev = &us[d - 1];
             let corr: Vec<f64> = (0..level.nodes.len())
                 .into_par_iter()
-                .with_min_len(CHUNK)
+                .with_min_len(GRAIN)
                 .map(|i| {
                     let c = level.nodes[i];
                     let mut acc = 0.0;

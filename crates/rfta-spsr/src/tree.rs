@@ -284,34 +284,34 @@ pub(crate) fn build_levels(samples: &[Sample], depth: u32, base: u32) -> Vec<Lev
         refined[d as usize + 1] = finer;
         refined[d as usize] = mine;
     }
-    let mut levels = Vec::with_capacity(depth as usize + 1);
-    for d in 0..=depth {
-        let cells: Vec<u64> = if d <= base {
-            let mut all: Vec<u64> = (0..1u64 << (3 * d)).collect();
-            all.sort_unstable();
-            all
-        } else {
-            let parents = &refined[d as usize - 1];
-            let mut v = Vec::with_capacity(parents.len() * 8);
-            for &p in parents {
-                v.extend((0..8).map(|c| p * 8 + c));
-            }
-            v
-        };
-        let is_refined: Vec<bool> = if d < base {
-            vec![true; cells.len()]
-        } else if d == depth {
-            vec![false; cells.len()]
-        } else {
-            let r = &refined[d as usize];
-            cells
-                .par_iter()
-                .map(|k| r.binary_search(k).is_ok())
-                .collect()
-        };
-        levels.push(make_level(d, cells, is_refined));
-    }
-    levels
+    // Each depth's cells, nodes and indices depend only on the refined sets: built side by side.
+    (0..=depth)
+        .into_par_iter()
+        .map(|d| {
+            let cells: Vec<u64> = if d <= base {
+                (0..1u64 << (3 * d)).collect()
+            } else {
+                let parents = &refined[d as usize - 1];
+                let mut v = Vec::with_capacity(parents.len() * 8);
+                for &p in parents {
+                    v.extend((0..8).map(|c| p * 8 + c));
+                }
+                v
+            };
+            let is_refined: Vec<bool> = if d < base {
+                vec![true; cells.len()]
+            } else if d == depth {
+                vec![false; cells.len()]
+            } else {
+                let r = &refined[d as usize];
+                cells
+                    .par_iter()
+                    .map(|k| r.binary_search(k).is_ok())
+                    .collect()
+            };
+            make_level(d, cells, is_refined)
+        })
+        .collect()
 }
 
 fn make_level(depth: u32, cells: Vec<u64>, refined: Vec<bool>) -> Level {
