@@ -649,6 +649,34 @@ struct DownTerms {
     parents: Option<Vec<u32>>,
 }
 
+/// A previous solution to start the relaxation from: per depth, its nodes and their
+/// coefficients `x_d` (each the correction on top of the coarser depths, so a node's value is
+/// a good guess wherever the cloud and the coarser solution changed little).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct WarmStart {
+    pub nodes: Vec<crate::keys::SparseIndex>,
+    pub x: Vec<Vec<f64>>,
+}
+
+impl WarmStart {
+    /// The previous coefficients at this depth's nodes (0 at nodes that are new), if the previous
+    /// solution reached this depth.
+    fn start(&self, d: usize, level: &Level) -> Option<Vec<f64>> {
+        let (index, x) = (self.nodes.get(d)?, self.x.get(d)?);
+        if x.is_empty() {
+            return None;
+        }
+        Some(
+            level
+                .nodes
+                .par_iter()
+                .with_min_len(GRAIN)
+                .map(|&c| index.get(ic(c)).map_or(0.0, |j| x[j as usize]))
+                .collect(),
+        )
+    }
+}
+
 /// Solution: per depth the coefficients `x_d` and the nodal values `U_d` of `Σ_{l ≤ d} χ_l`.
 pub(crate) struct Solution {
     pub x: Vec<Vec<f64>>,
@@ -662,6 +690,7 @@ pub(crate) fn solve(
     mut v: Vec<Vec<DVec3>>,
     params: &SpsrParams,
     base: u32,
+    warm: Option<&WarmStart>,
 ) -> Solution {
     let depth = levels.len() - 1;
     // Index tables of the down pass that the up pass needs again: kept for the depths small
@@ -784,7 +813,10 @@ pub(crate) fn solve(
         let x = if (d as u32) < base {
             conjugate_gradients(level, sys, &nbr, &rhs, params.base_iterations, 1e-6)
         } else {
-            let mut x = vec![0.0; level.nodes.len()];
+            let mut x = match warm.and_then(|w| w.start(d, level)) {
+                Some(x) => x,
+                None => vec![0.0; level.nodes.len()],
+            };
             gauss_seidel(level, sys, &nbr, &rhs, &mut x, params.iterations);
             x
         };
