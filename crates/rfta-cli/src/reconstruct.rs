@@ -192,6 +192,17 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
             r.unsupported_removed
         ));
     }
+    if r.side_errors.len() > 1 {
+        ui.detail(format!(
+            "the final solve put {} samples on the wrong side of (or at) its surface; re-solved with them screened toward their side: {}",
+            r.side_errors[0],
+            r.side_errors[1..]
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(", then ")
+        ));
+    }
     if r.vertices_pushed_out > 0 {
         ui.detail(format!(
             "moved {} vertices out of the sample spheres they entered",

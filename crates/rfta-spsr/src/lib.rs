@@ -51,6 +51,8 @@ mod tree;
 
 use std::time::{Duration, Instant};
 
+use rayon::prelude::*;
+
 /// The types of this crate's API, so that depending on `rfta-spsr` alone is enough.
 pub use rfta_geom::{OrientedPoints, TriMesh, glam};
 
@@ -217,6 +219,9 @@ pub struct SpsrReport {
     pub cells_per_depth: Vec<usize>,
     /// The iso-value (weighted mean of the function at the samples).
     pub iso_value: f64,
+    /// With side points ([`reconstruct_with_sides`]): how many were on the wrong side after each
+    /// solve, the last entry for the surface returned. Empty without them.
+    pub side_errors: Vec<usize>,
     /// Leaves whose face segments did not close into loops (always 0 unless there is a bug; the
     /// mesh is then not watertight there).
     pub broken_leaves: usize,
@@ -246,7 +251,86 @@ pub struct Reconstruction {
 /// [`Error::InvalidParams`], [`Error::NoSurface`] when the normals are so inconsistent that the
 /// solution has no level set, [`Error::ThreadPool`].
 pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
-    Ok(in_pool(params, || run(points, params, None, false))?.0)
+    Ok(in_pool(params, || run(points, params, &[], None, false))?.0)
+}
+
+/// A point the surface must leave on one side: inside (`inside: true`) or outside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SidePoint {
+    /// Where, in the points' coordinates.
+    pub position: glam::DVec3,
+    /// Whether it lies inside the surface.
+    pub inside: bool,
+}
+
+/// Re-solves after the first at most, in [`reconstruct_with_sides`].
+pub const SIDE_PASSES: usize = 4;
+
+/// A side point counts as wrong unless the function is at least this far on its side of the
+/// iso-value (in the indicator's units: 1 inside, 0 outside): the extracted surface follows the
+/// function only approximately, and a point right at the iso-value is on neither side.
+pub const SIDE_MARGIN: f64 = 0.02;
+
+/// A wrong side point is screened toward the iso-value plus (inside) or minus (outside) this: a
+/// target just past the surface moves it no farther than needed (measured on the Reach for the
+/// Arcs dev set, docs/faithfulness.md: targets of 1/2 past it, the indicator's own values,
+/// dig pits and tunnels around the points).
+pub const SIDE_TARGET: f64 = 0.1;
+
+/// Weight of a side constraint in its first re-solve, in units of the mean screening weight of
+/// one merged sample; each later re-solve that still finds it wrong multiplies it by
+/// [`SIDE_WEIGHT_GROWTH`].
+pub const SIDE_WEIGHT: f64 = 1.0;
+
+/// Growth of a still-wrong side constraint's weight from one re-solve to the next.
+pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
+
+/// [`reconstruct`], with points known to lie inside or outside the surface.
+///
+/// The screened Poisson energy pulls the indicator function toward 1/2 at the samples. Here,
+/// after the first solve, every side point where the function is not at least [`SIDE_MARGIN`]
+/// on its side of the iso-value becomes a screening term of its own, with the target
+/// iso ± [`SIDE_TARGET`] and weight [`SIDE_WEIGHT`], and the system is solved again on the same
+/// octree; up to [`SIDE_PASSES`] times, each adding the points still wrong and multiplying the
+/// weight of those that stay wrong by [`SIDE_WEIGHT_GROWTH`]. This is the screening term with a
+/// target per point, in the spirit of the envelope constraints of Kazhdan, Chuang, Rusinkiewicz
+/// and Hoppe ("Poisson Surface Reconstruction with Envelope Constraints", SGP 2020), applied only
+/// where the plain solution disagrees. Side points outside the reconstruction cube are ignored.
+/// [`SpsrReport::side_errors`] says how many were wrong after each solve.
+///
+/// ```
+/// use rfta_spsr::{OrientedPoints, SidePoint, SpsrParams, glam::DVec3, reconstruct_with_sides};
+///
+/// // Points on two spheres of radius 0.5 whose centres are 1.05 apart: a 0.05 gap that the
+/// // smooth solution bridges at depth 5; the gap's centre is outside.
+/// let mut pts = Vec::new();
+/// let mut nrm = Vec::new();
+/// for c in [-0.525, 0.525] {
+///     for i in 0..1500 {
+///         let z = 1.0 - 2.0 * (i as f64 + 0.5) / 1500.0;
+///         let phi = i as f64 * 2.399963229728653;
+///         let s = (1.0 - z * z).sqrt();
+///         let n = DVec3::new(z, s * phi.cos(), s * phi.sin());
+///         pts.push(DVec3::new(c, 0.0, 0.0) + 0.5 * n);
+///         nrm.push(n);
+///     }
+/// }
+/// let cloud = OrientedPoints::new(pts, nrm, None)?;
+/// let sides = [SidePoint { position: DVec3::ZERO, inside: false }];
+/// let params = SpsrParams { depth: 5, ..SpsrParams::default() };
+/// let out = reconstruct_with_sides(&cloud, &sides, &params)?;
+/// assert_eq!(out.report.side_errors.last(), Some(&0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// As [`reconstruct`].
+pub fn reconstruct_with_sides(
+    points: &OrientedPoints,
+    sides: &[SidePoint],
+    params: &SpsrParams,
+) -> Result<Reconstruction> {
+    Ok(in_pool(params, || run(points, params, sides, None, false))?.0)
 }
 
 /// What one reconstruction leaves for the next, for clouds that change little from one solve to
@@ -307,7 +391,9 @@ impl Workspace {
         points: &OrientedPoints,
         params: &SpsrParams,
     ) -> Result<Reconstruction> {
-        let (out, warm) = in_pool(params, || run(points, params, self.last.as_ref(), true))?;
+        let (out, warm) = in_pool(params, || {
+            run(points, params, &[], self.last.as_ref(), true)
+        })?;
         self.last = warm;
         Ok(out)
     }
@@ -337,6 +423,7 @@ fn in_pool<T: Send>(params: &SpsrParams, f: impl FnOnce() -> Result<T> + Send) -
 fn run(
     points: &OrientedPoints,
     params: &SpsrParams,
+    sides: &[SidePoint],
     warm: Option<&solve::WarmStart>,
     keep: bool,
 ) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
@@ -364,27 +451,77 @@ fn run(
     let total_w: f64 = samples.iter().map(|s| s.weight).sum();
     let total_a: f64 = samples.iter().map(|s| s.area).sum();
     let alpha = params.screening * total_a / total_w;
-    let systems = solve::build_systems(&levels, &samples, params, alpha);
-    let v = solve::splat_normals(&levels, &samples);
-    let system_time = t1.elapsed();
-
-    let t2 = Instant::now();
-    let sol = solve::solve(&levels, &systems, v, params, base, warm);
-    drop(systems);
-    let (mut num, mut den) = (0.0, 0.0);
-    let vals: Vec<f64> = {
-        use rayon::prelude::*;
-        samples
+    let mut v = Some(solve::splat_normals(&levels, &samples));
+    // Side points in the cube, with the value of their side.
+    let sides: Vec<(glam::DVec3, bool)> = sides
+        .iter()
+        .map(|s| (frame.to_unit(s.position), s.inside))
+        .filter(|(u, _)| u.cmpge(glam::DVec3::ZERO).all() && u.cmplt(glam::DVec3::ONE).all())
+        .collect();
+    let mut constraints: Vec<solve::ValueConstraint> = Vec::new();
+    // Per side point, its constraint's index once it has one.
+    let mut active: Vec<Option<u32>> = vec![None; sides.len()];
+    let mut side_errors = Vec::new();
+    let mut system_time = t1.elapsed();
+    let mut solve_time = Duration::ZERO;
+    let (sol, iso) = loop {
+        let t1 = Instant::now();
+        let systems = solve::build_systems(&levels, &samples, &constraints, params, alpha);
+        let last = sides.is_empty() || side_errors.len() == SIDE_PASSES;
+        let normals = if last { v.take() } else { v.clone() }.unwrap_or_default();
+        system_time += t1.elapsed();
+        let t2 = Instant::now();
+        let sol = solve::solve(&levels, &systems, normals, params, base, warm);
+        drop(systems);
+        let at = |p: glam::DVec3| solve::evaluate(&levels, &sol, p, base);
+        let vals: Vec<f64> = samples.par_iter().map(|s| at(s.pos)).collect();
+        let (mut num, mut den) = (0.0, 0.0);
+        for (s, f) in samples.iter().zip(&vals) {
+            num += s.weight * f;
+            den += s.weight;
+        }
+        let iso = num / den;
+        if sides.is_empty() {
+            solve_time += t2.elapsed();
+            break (sol, iso);
+        }
+        let wrong: Vec<usize> = sides
             .par_iter()
-            .map(|s| solve::evaluate(&levels, &sol, s.pos, base))
-            .collect()
+            .enumerate()
+            .filter(|(_, (p, inside))| {
+                let f = at(*p);
+                if *inside {
+                    f < iso + SIDE_MARGIN
+                } else {
+                    f > iso - SIDE_MARGIN
+                }
+            })
+            .map(|(i, _)| i)
+            .collect();
+        side_errors.push(wrong.len());
+        solve_time += t2.elapsed();
+        if last || wrong.is_empty() {
+            break (sol, iso);
+        }
+        for i in wrong {
+            match active[i] {
+                Some(c) => constraints[c as usize].weight *= SIDE_WEIGHT_GROWTH,
+                None => {
+                    active[i] = Some(constraints.len() as u32);
+                    let (pos, inside) = sides[i];
+                    constraints.push(solve::ValueConstraint {
+                        pos,
+                        target: if inside {
+                            iso + SIDE_TARGET
+                        } else {
+                            iso - SIDE_TARGET
+                        },
+                        weight: SIDE_WEIGHT * total_w / samples.len() as f64,
+                    });
+                }
+            }
+        }
     };
-    for (s, f) in samples.iter().zip(&vals) {
-        num += s.weight * f;
-        den += s.weight;
-    }
-    let iso = num / den;
-    let solve_time = t2.elapsed();
 
     let t3 = Instant::now();
     let solve::Solution { x, u } = sol;
@@ -415,6 +552,7 @@ fn run(
         nodes_per_depth: levels.iter().map(|l| l.nodes.len()).collect(),
         cells_per_depth: levels.iter().map(|l| l.cells.len()).collect(),
         iso_value: iso,
+        side_errors,
         broken_leaves: ex.broken_leaves,
         tree_time,
         system_time,

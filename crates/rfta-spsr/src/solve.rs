@@ -17,6 +17,10 @@ use crate::{Boundary, SpsrParams};
 
 use crate::keys::NONE;
 /// Chunk length of parallel sums: fixed, so sums never depend on the thread count.
+/// The value the screening pulls the function toward at the samples (the indicator is 1 inside
+/// and 0 outside, so 1/2 on the surface).
+pub(crate) const SAMPLE_TARGET: f64 = 0.5;
+
 const CHUNK: usize = 2048;
 
 /// Smallest piece a parallel loop is split into. Loops that write each element on its own give
@@ -51,6 +55,18 @@ pub(crate) struct ScreenCell {
     pub pos: DVec3,
     /// Hat values at the eight corners.
     pub hats: [f64; 8],
+    /// The value the screening pulls the function toward here: 1/2 at the samples, a side's value
+    /// at a [`ValueConstraint`].
+    pub target: f64,
+}
+
+/// A point where the function is screened toward a value of its own (unit cube): the side
+/// constraints of [`crate::reconstruct_with_sides`], at a weight in units of one input point's.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ValueConstraint {
+    pub pos: DVec3,
+    pub target: f64,
+    pub weight: f64,
 }
 
 /// Everything a depth needs to relax its own system.
@@ -84,6 +100,7 @@ impl LevelSystem {
 pub(crate) fn build_systems(
     levels: &[Level],
     samples: &[Sample],
+    constraints: &[ValueConstraint],
     params: &SpsrParams,
     alpha: f64,
 ) -> Vec<LevelSystem> {
@@ -123,9 +140,25 @@ pub(crate) fn build_systems(
                         weight: alpha * depth_scale * w,
                         pos,
                         hats: hats_in(pos, cc, d),
+                        target: SAMPLE_TARGET,
                     });
                 }
                 i = j;
+            }
+            // Value constraints act on the depths whose tree reaches them, each on its own.
+            if alpha > 0.0 {
+                for c in constraints {
+                    let cc = cell_of(c.pos, d);
+                    if let Some(cell) = level.cell(ic(cc)) {
+                        screen.push(ScreenCell {
+                            cell,
+                            weight: alpha * depth_scale * c.weight,
+                            pos: c.pos,
+                            hats: hats_in(c.pos, cc, d),
+                            target: c.target,
+                        });
+                    }
+                }
             }
             let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(screen.len() * 8);
             for (s, sc) in screen.iter().enumerate() {
@@ -743,7 +776,6 @@ pub(crate) fn solve(
         }
         beta[d] = b;
     }
-    let target = 0.5;
     let mut xs: Vec<Vec<f64>> = Vec::with_capacity(depth + 1);
     let mut us: Vec<Vec<f64>> = Vec::with_capacity(depth + 1);
     let mut w_prev: Vec<DVec3> = Vec::new();
@@ -801,7 +833,7 @@ pub(crate) fn solve(
             };
             let corners = &level.corners[s.cell as usize];
             for k in 0..8 {
-                rhs[corners[k] as usize] += s.weight * s.hats[k] * (target - fc);
+                rhs[corners[k] as usize] += s.weight * s.hats[k] * (s.target - fc);
             }
         }
         for (r, &f) in rhs.iter_mut().zip(&sys.fixed) {

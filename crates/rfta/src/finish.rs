@@ -27,7 +27,10 @@ pub(crate) fn finish(
     let cloud = rounds.cloud;
     report.points_per_round.push(cloud.len());
     let t = Instant::now();
-    let mut mesh = crate::rounds::solve(&cloud, &params.spsr_params(Some(unit.spacing())))?;
+    let sides = unit.sides();
+    let solved = crate::rounds::solve(&cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
+    report.side_errors = solved.report.side_errors;
+    let mut mesh = solved.mesh;
     report
         .timings
         .push(("final screened Poisson".into(), t.elapsed()));

@@ -72,6 +72,21 @@ impl UnitBox {
 
     /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
     /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
+    /// Every sample far enough from the surface to have a reliable side, as a point the
+    /// surface must leave on that side.
+    pub(crate) fn sides(&self) -> Vec<rfta_spsr::SidePoint> {
+        let margin = crate::consistency::SIGN_MARGIN * self.spacing();
+        self.spheres
+            .iter()
+            .zip(&self.values)
+            .filter(|(_, v)| v.abs() > margin)
+            .map(|(s, v)| rfta_spsr::SidePoint {
+                position: s.center,
+                inside: *v < 0.0,
+            })
+            .collect()
+    }
+
     pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
         let band = match params.owner_band {
             Some(k) if self.grid => k * self.spacing(),

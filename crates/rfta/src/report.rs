@@ -91,6 +91,10 @@ pub struct Report {
     pub far_spheres: usize,
     /// Small closed islands removed from the final mesh (see [`crate::Params::min_island`]).
     pub islands_removed: usize,
+    /// Samples the final screened Poisson function put on the wrong side, after its first solve
+    /// and after each re-solve that screened them toward their side
+    /// ([`rfta_spsr::reconstruct_with_sides`]); the last entry is the returned surface's.
+    pub side_errors: Vec<usize>,
     /// Mesh vertices that were inside a sample sphere and moved onto its boundary.
     pub vertices_pushed_out: usize,
     /// Components removed from the final mesh because the samples contradict them: every vertex

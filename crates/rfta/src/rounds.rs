@@ -4,9 +4,9 @@
 use std::time::Instant;
 
 use rfta_feasible::TangentPoints;
-use rfta_geom::{OrientedPoints, TriMesh};
+use rfta_geom::OrientedPoints;
 use rfta_sphere_tree::SphereTree;
-use rfta_spsr::SpsrParams;
+use rfta_spsr::{SidePoint, SpsrParams};
 
 use crate::normalize::UnitBox;
 use crate::params::Seeds;
@@ -69,8 +69,10 @@ impl Rounds {
                     &batch
                 }
             };
-            let mesh = match solve(&self.cloud, &self.spsr) {
-                Ok(m) => m,
+            // A round's surface only guides the next moves: no side constraints (measured in
+            // docs/faithfulness.md).
+            let mesh = match solve(&self.cloud, &[], &self.spsr) {
+                Ok(r) => r.mesh,
                 Err(e) => {
                     report.stopped_early = Some(format!("round {round}: {e}"));
                     break;
@@ -110,12 +112,14 @@ impl Rounds {
     }
 }
 
-/// Screened Poisson reconstruction of the tangency points.
+/// Screened Poisson reconstruction of the tangency points, re-solved where it puts one of
+/// `sides` on the wrong side ([`rfta_spsr::reconstruct_with_sides`]; none: one solve).
 pub(crate) fn solve(
     cloud: &TangentPoints,
+    sides: &[SidePoint],
     spsr: &SpsrParams,
-) -> std::result::Result<TriMesh, rfta_spsr::Error> {
+) -> std::result::Result<rfta_spsr::Reconstruction, rfta_spsr::Error> {
     let pts = OrientedPoints::new(cloud.points.clone(), cloud.normals.clone(), None)
         .map_err(|e| rfta_spsr::Error::DegenerateInput(format!("tangency points: {e}")))?;
-    Ok(rfta_spsr::reconstruct(&pts, spsr)?.mesh)
+    rfta_spsr::reconstruct_with_sides(&pts, sides, spsr)
 }
