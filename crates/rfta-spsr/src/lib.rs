@@ -295,8 +295,10 @@ pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
 /// weight of those that stay wrong by [`SIDE_WEIGHT_GROWTH`]. This is the screening term with a
 /// target per point, in the spirit of the envelope constraints of Kazhdan, Chuang, Rusinkiewicz
 /// and Hoppe ("Poisson Surface Reconstruction with Envelope Constraints", SGP 2020), applied only
-/// where the plain solution disagrees. Side points outside the reconstruction cube are ignored.
-/// [`SpsrReport::side_errors`] says how many were wrong after each solve.
+/// where the plain solution disagrees. Side points outside the reconstruction cube are ignored,
+/// and a re-solve whose surface leaves the cube (an open mesh) is dropped for the first solve's.
+/// [`SpsrReport::side_errors`] says how many were wrong after each solve whose surface it
+/// returns.
 ///
 /// ```
 /// use rfta_spsr::{OrientedPoints, SidePoint, SpsrParams, glam::DVec3, reconstruct_with_sides};
@@ -404,6 +406,20 @@ impl Workspace {
     }
 }
 
+/// Edges of `faces` that only one face uses (0 for a closed mesh).
+fn open_edges(faces: &[[u32; 3]]) -> usize {
+    let mut edges: Vec<(u32, u32)> = faces
+        .iter()
+        .flat_map(|f| [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    edges.par_sort_unstable();
+    edges
+        .chunk_by(|a, b| a == b)
+        .filter(|run| run.len() == 1)
+        .count()
+}
+
 /// Runs `f` on `params.threads` threads (rayon's pool when unset).
 fn in_pool<T: Send>(params: &SpsrParams, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
     params.validate()?;
@@ -464,6 +480,8 @@ fn run(
     let mut side_errors = Vec::new();
     let mut system_time = t1.elapsed();
     let mut solve_time = Duration::ZERO;
+    // The first solve's solution and iso-value, kept while re-solves run.
+    let mut first: Option<(solve::Solution, f64)> = None;
     let (sol, iso) = loop {
         let t1 = Instant::now();
         let systems = solve::build_systems(&levels, &samples, &constraints, params, alpha);
@@ -503,6 +521,9 @@ fn run(
         if last || wrong.is_empty() {
             break (sol, iso);
         }
+        if first.is_none() {
+            first = Some((sol, iso));
+        }
         for i in wrong {
             match active[i] {
                 Some(c) => constraints[c as usize].weight *= SIDE_WEIGHT_GROWTH,
@@ -530,6 +551,19 @@ fn run(
     // Only the coefficients outlive the extraction, and only when the next solve will use them.
     let kept_x = keep.then_some(x);
     let mut ex = extract::extract(&levels, &values, iso);
+    let mut iso = iso;
+    // A re-solve that pulls the surface out of the cube (an open mesh where the first solve's
+    // was closed) is dropped for the first solve's surface.
+    if let Some((sol, first_iso)) = first
+        && open_edges(&ex.faces) > 0
+    {
+        let plain = extract::extract(&levels, &extract::final_values(&levels, &sol.u), first_iso);
+        if open_edges(&plain.faces) < open_edges(&ex.faces) {
+            ex = plain;
+            iso = first_iso;
+            side_errors.truncate(1);
+        }
+    }
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });
     }
