@@ -314,6 +314,19 @@ pub(crate) fn final_values(levels: &[Level], u: &[Vec<f64>]) -> Vec<Vec<f64>> {
     out
 }
 
+/// Whether the iso-surface reaches the cube's faces: some node on them is inside (`χ > iso`).
+/// The extraction closes the surface only inside the cube, so such a surface comes out open.
+pub(crate) fn leaves_cube(levels: &[Level], values: &[Vec<f64>], iso: f64) -> bool {
+    levels.iter().zip(values).any(|(level, vals)| {
+        let n = level.n();
+        level
+            .nodes
+            .par_iter()
+            .zip(vals)
+            .any(|(c, &f)| f > iso && c.iter().any(|&v| v == 0 || v == n))
+    })
+}
+
 /// Extract the iso-surface `χ = iso` (triangles oriented toward decreasing χ, i.e. outward).
 pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extracted {
     let depth = levels.len() as u32 - 1;

@@ -296,7 +296,8 @@ pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
 /// target per point, in the spirit of the envelope constraints of Kazhdan, Chuang, Rusinkiewicz
 /// and Hoppe ("Poisson Surface Reconstruction with Envelope Constraints", SGP 2020), applied only
 /// where the plain solution disagrees. Side points outside the reconstruction cube are ignored,
-/// and a re-solve whose surface leaves the cube (an open mesh) is dropped for the first solve's.
+/// and re-solves whose surface reaches the cube's faces (where it would come out open) are
+/// dropped for the first solve's surface when that one stays inside.
 /// [`SpsrReport::side_errors`] says how many were wrong after each solve whose surface it
 /// returns.
 ///
@@ -321,6 +322,8 @@ pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
 /// let sides = [SidePoint { position: DVec3::ZERO, inside: false }];
 /// let params = SpsrParams { depth: 5, ..SpsrParams::default() };
 /// let out = reconstruct_with_sides(&cloud, &sides, &params)?;
+/// // Wrong after the first solve, right after the last.
+/// assert_eq!(out.report.side_errors.first(), Some(&1));
 /// assert_eq!(out.report.side_errors.last(), Some(&0));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
@@ -339,8 +342,8 @@ pub fn reconstruct_with_sides(
 /// the next (the fine-tuning rounds of Reach for the Arcs move every point by a small step).
 ///
 /// Each solve after the first starts its Gauss-Seidel relaxation from the previous solve's
-/// coefficients at the nodes both octrees share, so fewer sweeps ([`SpsrParams::iterations`])
-/// reach the same residual. The octree itself is rebuilt every time: moving points change its
+/// coefficients at the nodes both octrees share, so the same sweeps
+/// ([`SpsrParams::iterations`]) land nearer the converged solution. The octree itself is rebuilt every time: moving points change its
 /// refinement (measured on the rounds at 21^3: 2% to 8% of the refined cells are new each
 /// round), and a tree kept from before would no longer be the one the density estimate asks
 /// for. Results depend only on the sequence of inputs, never on the thread count.
@@ -404,20 +407,6 @@ impl Workspace {
     pub fn clear(&mut self) {
         self.last = None;
     }
-}
-
-/// Edges of `faces` that only one face uses (0 for a closed mesh).
-fn open_edges(faces: &[[u32; 3]]) -> usize {
-    let mut edges: Vec<(u32, u32)> = faces
-        .iter()
-        .flat_map(|f| [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])])
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
-    edges.par_sort_unstable();
-    edges
-        .chunk_by(|a, b| a == b)
-        .filter(|run| run.len() == 1)
-        .count()
 }
 
 /// Runs `f` on `params.threads` threads (rayon's pool when unset).
@@ -546,24 +535,24 @@ fn run(
 
     let t3 = Instant::now();
     let solve::Solution { x, u } = sol;
-    let values = extract::final_values(&levels, &u);
+    let mut values = extract::final_values(&levels, &u);
     drop(u);
     // Only the coefficients outlive the extraction, and only when the next solve will use them.
     let kept_x = keep.then_some(x);
-    let mut ex = extract::extract(&levels, &values, iso);
     let mut iso = iso;
-    // A re-solve that pulls the surface out of the cube (an open mesh where the first solve's
-    // was closed) is dropped for the first solve's surface.
+    // A re-solve that pulls the surface out of the cube (where it would come out open) while the
+    // first solve's stayed inside is dropped for the first solve's surface.
     if let Some((sol, first_iso)) = first
-        && open_edges(&ex.faces) > 0
+        && extract::leaves_cube(&levels, &values, iso)
     {
-        let plain = extract::extract(&levels, &extract::final_values(&levels, &sol.u), first_iso);
-        if open_edges(&plain.faces) < open_edges(&ex.faces) {
-            ex = plain;
+        let plain = extract::final_values(&levels, &sol.u);
+        if !extract::leaves_cube(&levels, &plain, first_iso) {
+            values = plain;
             iso = first_iso;
             side_errors.truncate(1);
         }
     }
+    let mut ex = extract::extract(&levels, &values, iso);
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });
     }

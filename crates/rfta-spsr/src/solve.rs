@@ -16,11 +16,11 @@ use crate::tree::{Level, Sample, cell_of, corner, hats_in};
 use crate::{Boundary, SpsrParams};
 
 use crate::keys::NONE;
-/// Chunk length of parallel sums: fixed, so sums never depend on the thread count.
 /// The value the screening pulls the function toward at the samples (the indicator is 1 inside
 /// and 0 outside, so 1/2 on the surface).
 pub(crate) const SAMPLE_TARGET: f64 = 0.5;
 
+/// Chunk length of parallel sums: fixed, so sums never depend on the thread count.
 const CHUNK: usize = 2048;
 
 /// Smallest piece a parallel loop is split into. Loops that write each element on its own give
@@ -61,7 +61,8 @@ pub(crate) struct ScreenCell {
 }
 
 /// A point where the function is screened toward a value of its own (unit cube): the side
-/// constraints of [`crate::reconstruct_with_sides`], at a weight in units of one input point's.
+/// constraints of [`crate::reconstruct_with_sides`], with a weight in the samples' units
+/// ([`Sample::weight`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ValueConstraint {
     pub pos: DVec3,

@@ -70,10 +70,8 @@ impl UnitBox {
         p * self.scale + self.trans
     }
 
-    /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
-    /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
-    /// Every sample far enough from the surface to have a reliable side, as a point the
-    /// surface must leave on that side.
+    /// Every sample far enough from the surface to have a reliable side
+    /// ([`crate::consistency::SIGN_MARGIN`]), as a point the surface must leave on that side.
     pub(crate) fn sides(&self) -> Vec<rfta_spsr::SidePoint> {
         let margin = crate::consistency::SIGN_MARGIN * self.spacing();
         self.spheres
@@ -87,6 +85,8 @@ impl UnitBox {
             .collect()
     }
 
+    /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
+    /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
     pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
         let band = match params.owner_band {
             Some(k) if self.grid => k * self.spacing(),
