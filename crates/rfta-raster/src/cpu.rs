@@ -9,8 +9,10 @@
 //! 2. every sphere marks the blocks it holds entirely, in the superblocks it reaches that no
 //!    sphere holds;
 //! 3. every sphere rasterizes its cells in the blocks it reaches that no sphere holds, visiting
-//!    only superblocks with such a block: per column of cells, the run of cells entirely inside
-//!    is set word by word and the remaining candidates are tested at their jittered sample;
+//!    only superblocks with such a block: the cells of a block are one cache line ([`Cells`]), the
+//!    cells some sphere has set already are skipped a row of the block at a time, the others are
+//!    set when entirely inside or tested at their jittered sample, and a block that becomes full
+//!    is marked held so that the spheres after it skip it;
 //! 4. every held block and superblock is filled.
 //!
 //! A held block's cells are all occupied (its covering sphere holds every sample), and every
@@ -185,16 +187,77 @@ pub(crate) fn occupancy(spheres: &[QSphere], params: &RasterParams) -> BitGrid {
         .par_iter()
         .for_each(|s| hold_blocks(s, blocks, &held_super, &held));
     let open = open_supers(&held_super, &held);
-    let fine = Bits::new(res as usize);
+    let fine = Cells::new(blocks.n() as usize);
     spheres
         .par_iter()
         .for_each(|s| rasterize_open(s, blocks, seed, &open, &held, &fine));
     fill(&held_super, supers, &fine);
     fill(&held, blocks, &fine);
-    BitGrid::from_words(
-        res as usize,
-        fine.words.into_iter().map(AtomicU64::into_inner).collect(),
-    )
+    fine.into_grid(res as usize)
+}
+
+/// The cells, block by block: block `(bx, by, bz)` is [`BLOCK`] words (word `ix % 8`, bit
+/// `8 (iy % 8) + iz % 8`), one cache line, so a sphere reads and writes a block it reaches at
+/// once. Bits of cells beyond the grid's last cell may be set (filled blocks); they are dropped
+/// by [`Cells::into_grid`].
+struct Cells {
+    nb: usize,
+    words: Vec<AtomicU64>,
+}
+
+/// Every bit of a block.
+const FULL: u64 = u64::MAX;
+
+impl Cells {
+    fn new(nb: usize) -> Self {
+        Self {
+            nb,
+            words: (0..nb * nb * nb * BLOCK as usize)
+                .map(|_| AtomicU64::new(0))
+                .collect(),
+        }
+    }
+
+    fn block(&self, [bx, by, bz]: [u32; 3]) -> &[AtomicU64] {
+        let b = (bx as usize * self.nb + by as usize) * self.nb + bz as usize;
+        &self.words[b * BLOCK as usize..(b + 1) * BLOCK as usize]
+    }
+
+    /// Sets every cell of a block.
+    fn fill_block(&self, b: [u32; 3]) {
+        for word in self.block(b) {
+            if word.load(Ordering::Relaxed) != FULL {
+                word.store(FULL, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// The cells of a `res^3` grid in column order.
+    fn into_grid(self, res: usize) -> BitGrid {
+        let nb = self.nb;
+        let words: Vec<u64> = self.words.into_iter().map(AtomicU64::into_inner).collect();
+        let wpc = res.div_ceil(64);
+        let mut out = vec![0u64; res * res * wpc];
+        out.par_chunks_mut(res * wpc)
+            .enumerate()
+            .for_each(|(ix, slab)| {
+                let (bx, lx) = (ix / BLOCK as usize, ix % BLOCK as usize);
+                for (iy, column) in slab.chunks_mut(wpc).enumerate() {
+                    let (by, ly) = (iy / BLOCK as usize, iy % BLOCK as usize);
+                    for bz in 0..nb {
+                        let word = words[((bx * nb + by) * nb + bz) * BLOCK as usize + lx];
+                        let byte = (word >> (8 * ly)) & 0xff;
+                        let z = bz * BLOCK as usize;
+                        column[z / 64] |= byte << (z % 64);
+                    }
+                    // Cells beyond the grid.
+                    if !res.is_multiple_of(64) {
+                        column[wpc - 1] &= (1u64 << (res % 64)) - 1;
+                    }
+                }
+            });
+        BitGrid::from_words(res, out)
+    }
 }
 
 /// Nearest and farthest squared lattice distance along one axis from the lattice points of cells
@@ -305,7 +368,7 @@ fn open_supers(held_super: &Bits, held: &Bits) -> Bits {
 }
 
 /// Step 3: the cells of `s` in the blocks no sphere holds, visiting open superblocks only.
-fn rasterize_open(s: &QSphere, blocks: Level, seed: u32, open: &Bits, held: &Bits, fine: &Bits) {
+fn rasterize_open(s: &QSphere, blocks: Level, seed: u32, open: &Bits, held: &Bits, fine: &Cells) {
     if empty(s) {
         return;
     }
@@ -343,53 +406,49 @@ fn rasterize_open(s: &QSphere, blocks: Level, seed: u32, open: &Bits, held: &Bit
     }
 }
 
-/// The cells of `s` in blocks `a..=b` of block column `(bx, by)` that no sphere holds.
+/// The cells of `s` in blocks `a..=b` of block column `(bx, by)` that no sphere holds; a block
+/// this fills is marked held, so that no other sphere visits it.
 #[expect(clippy::too_many_arguments, reason = "one block column of one sphere")]
 fn rasterize_blocks(
     s: &QSphere,
     blocks: Level,
     seed: u32,
     held: &Bits,
-    fine: &Bits,
+    fine: &Cells,
     [bx, by]: [u32; 2],
     a: u32,
     b: u32,
 ) {
-    let (x0, x1) = blocks.cells(bx);
-    let (x0, x1) = (x0.max(s.lo[0]), x1.min(s.hi[0]));
-    let (y0, y1) = blocks.cells(by);
-    let (y0, y1) = (y0.max(s.lo[1]), y1.min(s.hi[1]));
     for (w, bits) in held.run(bx, by, a, b) {
         let mut free = !bits & word_mask(w, a as usize, b as usize);
         while free != 0 {
             let bz = (w * 64) as u32 + free.trailing_zeros();
             free &= free - 1;
-            let (z0, z1) = blocks.cells(bz);
-            let (z0, z1) = (z0.max(s.lo[2]), z1.min(s.hi[2]));
-            for ix in x0..=x1 {
-                for iy in y0..=y1 {
-                    rasterize_column(s, blocks.res, seed, fine, [ix, iy], z0, z1);
-                }
+            if rasterize_block(s, blocks, seed, fine, [bx, by, bz]) {
+                held.set_run(bx, by, bz, bz);
             }
         }
     }
 }
 
-/// Step 4: fills every cell of every held unit of `level`.
-fn fill(held: &Bits, level: Level, fine: &Bits) {
+/// Step 4: fills every cell of every held unit of `level` (blocks or superblocks).
+fn fill(held: &Bits, level: Level, fine: &Cells) {
     let n = level.n();
-    (0..n).into_par_iter().for_each(|bx| {
-        for by in 0..n {
-            for (w, word) in held.column(bx, by).iter().enumerate() {
+    let per = level.size / BLOCK;
+    let n_blocks = fine.nb as u32;
+    (0..n).into_par_iter().for_each(|ux| {
+        for uy in 0..n {
+            for (w, word) in held.column(ux, uy).iter().enumerate() {
                 let mut bits = word.load(Ordering::Relaxed);
                 while bits != 0 {
-                    let bz = (w * 64) as u32 + bits.trailing_zeros();
+                    let uz = (w * 64) as u32 + bits.trailing_zeros();
                     bits &= bits - 1;
-                    let (z0, z1) = level.cells(bz);
-                    let ((x0, x1), (y0, y1)) = (level.cells(bx), level.cells(by));
-                    for ix in x0..=x1 {
-                        for iy in y0..=y1 {
-                            fine.set_run(ix, iy, z0, z1);
+                    let blocks = |u: u32| u * per..((u + 1) * per).min(n_blocks);
+                    for bx in blocks(ux) {
+                        for by in blocks(uy) {
+                            for bz in blocks(uz) {
+                                fine.fill_block([bx, by, bz]);
+                            }
                         }
                     }
                 }
@@ -398,53 +457,59 @@ fn fill(held: &Bits, level: Level, fine: &Bits) {
     });
 }
 
-/// Cells `z0..=z1` of column `(ix, iy)`, within one block (so within one word): a cell entirely
-/// inside is set at once, the others are tested at their jittered sample.
-fn rasterize_column(
-    s: &QSphere,
-    res: u32,
-    seed: u32,
-    fine: &Bits,
-    [ix, iy]: [u32; 2],
-    z0: u32,
-    z1: u32,
-) {
-    debug_assert_eq!(z0 / 64, z1 / 64);
+/// The cells of block `b` that `s` reaches and no other sphere has set yet: a cell entirely
+/// inside is set at once, the others are tested at their jittered sample. Returns whether the
+/// block is now full.
+fn rasterize_block(s: &QSphere, blocks: Level, seed: u32, fine: &Cells, b: [u32; 3]) -> bool {
     let r2 = s.r2 as u64;
-    let (nx, fx) = axis_range(ix, ix, s.c[0]);
-    let (ny, fy) = axis_range(iy, iy, s.c[1]);
-    if nx + ny > r2 {
-        return;
+    let range = |a: usize| {
+        let (c0, c1) = blocks.cells(b[a]);
+        (c0.max(s.lo[a]), c1.min(s.hi[a]))
+    };
+    let ((x0, x1), (y0, y1), (z0, z1)) = (range(0), range(1), range(2));
+    if x0 > x1 || y0 > y1 || z0 > z1 {
+        return false;
     }
-    let word = &fine.column(ix, iy)[z0 as usize / 64];
-    // Near the union's boundary most cells are set already by other spheres.
-    let have = word.load(Ordering::Relaxed);
-    let mut add = 0;
-    for iz in z0..=z1 {
-        let bit = 1u64 << (iz % 64);
-        if have & bit != 0 {
+    // The block's bits of rows y0..=y1, cells z0..=z1 of each.
+    let z_bits = (0xffu64 >> (7 - z1 % BLOCK)) & (0xff << (z0 % BLOCK));
+    let plane = (y0..=y1).fold(0, |m, iy| m | z_bits << (BLOCK * (iy % BLOCK)));
+    let words = fine.block(b);
+    for ix in x0..=x1 {
+        let word = &words[(ix % BLOCK) as usize];
+        // Near the union's boundary most cells are set already by other spheres.
+        let mut need = !word.load(Ordering::Relaxed) & plane;
+        let (nx, fx) = axis_range(ix, ix, s.c[0]);
+        if need == 0 || nx > r2 {
             continue;
         }
-        let (nz, fz) = axis_range(iz, iz, s.c[2]);
-        if nx + ny + nz > r2 {
-            continue;
+        let mut add = 0;
+        while need != 0 {
+            let bit = need.trailing_zeros();
+            need &= need - 1;
+            let iy = b[1] * BLOCK + bit / BLOCK;
+            let iz = b[2] * BLOCK + bit % BLOCK;
+            let (ny, fy) = axis_range(iy, iy, s.c[1]);
+            let (nz, fz) = axis_range(iz, iz, s.c[2]);
+            if nx + ny + nz > r2 {
+                continue;
+            }
+            // Every lattice point of the cell inside, or its jittered sample.
+            let inside = fx + fy + fz <= r2 || {
+                let m = jitter(seed, cell_index(blocks.res, ix, iy, iz));
+                let x = [
+                    ix * SUBCELLS + m[0],
+                    iy * SUBCELLS + m[1],
+                    iz * SUBCELLS + m[2],
+                ];
+                dist2(s, x) <= r2
+            };
+            if inside {
+                add |= 1u64 << bit;
+            }
         }
-        if fx + fy + fz <= r2 {
-            // Every lattice point of the cell is inside, its sample too.
-            add |= bit;
-            continue;
-        }
-        let m = jitter(seed, cell_index(res, ix, iy, iz));
-        let x = [
-            ix * SUBCELLS + m[0],
-            iy * SUBCELLS + m[1],
-            iz * SUBCELLS + m[2],
-        ];
-        if dist2(s, x) <= r2 {
-            add |= bit;
+        if add != 0 {
+            word.fetch_or(add, Ordering::Relaxed);
         }
     }
-    if add != 0 {
-        word.fetch_or(add, Ordering::Relaxed);
-    }
+    words.iter().all(|w| w.load(Ordering::Relaxed) == FULL)
 }
