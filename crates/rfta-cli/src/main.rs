@@ -2,10 +2,12 @@
 //!
 //! Exit status: 0 on success, 1 when the work failed (the message says which file and why),
 //! 2 for invalid command-line usage, 3 when `reconstruct`'s input describes no surface (every
-//! value of one sign): an empty mesh is written and the reason printed. Output goes through
+//! value of one sign): an empty mesh is written and the reason printed; 4 when `batch` tried
+//! every row and some failed or timed out. Output goes through
 //! `writeln!` (`ui::note`, `info`'s `out!`), so a closed pipe ends the tool quietly instead of
 //! panicking.
 
+mod batch;
 mod info;
 mod psr;
 mod reconstruct;
@@ -58,6 +60,9 @@ enum Command {
     Demo(reconstruct::DemoArgs),
     /// Screened Poisson surface reconstruction of oriented points (PoissonRecon's algorithm).
     Psr(psr::Args),
+    /// Reconstruct every row of a manifest (or one shard of it), for job arrays: status CSV,
+    /// resume, timeouts (docs/batch.md).
+    Batch(batch::Args),
     /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
     Info {
         /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .ply .csv .xyz SDF samples).
@@ -84,6 +89,7 @@ fn main() -> ExitCode {
         Command::Psr(args) => psr::run(args, &ui),
         Command::Reconstruct(args) => reconstruct::run(args, &ui),
         Command::Demo(args) => reconstruct::demo(args, &ui),
+        Command::Batch(args) => batch::run(args, cli.threads, &ui),
         Command::Info { file, bounds } => info::run(&file, bounds, &ui),
         Command::Mc {
             input,
@@ -94,6 +100,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<batch::SomeFailed>() => {
+            ui::note(&format!("error: {e}"));
+            ExitCode::from(batch::SOME_FAILED)
+        }
         Err(e) if e.is::<reconstruct::NoSurface>() => {
             ui::note(&format!("no surface: {e}"));
             ExitCode::from(3)

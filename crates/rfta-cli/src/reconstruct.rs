@@ -57,8 +57,11 @@ pub(crate) struct Args {
     /// Also write the final tangency points with their normals (PLY), e.g. for `rfta psr`.
     #[arg(long, value_name = "PLY")]
     points: Option<PathBuf>,
+    /// Also write the report's key figures as JSON (counts, agreement with the samples, seconds).
+    #[arg(long, value_name = "JSON")]
+    report: Option<PathBuf>,
     #[command(flatten)]
-    tuning: Tuning,
+    pub(crate) tuning: Tuning,
 }
 
 /// The input describes no surface: an empty mesh was written. `main` exits with status 3.
@@ -74,7 +77,7 @@ impl std::fmt::Display for NoSurface {
 impl std::error::Error for NoSurface {}
 
 /// Options shared by `reconstruct` and `demo`.
-#[derive(Debug, clap::Args)]
+#[derive(Debug, Clone, clap::Args)]
 pub(crate) struct Tuning {
     /// Starting parameters; the options below override them.
     #[arg(long, value_enum, default_value_t = Preset::Default)]
@@ -108,7 +111,37 @@ pub(crate) struct Tuning {
     depth: Option<u32>,
 }
 
+/// The command-line name of a preset.
+pub(crate) fn preset_name(p: Preset) -> String {
+    clap::ValueEnum::to_possible_value(&p).map_or_else(String::new, |v| v.get_name().to_string())
+}
+
 impl Tuning {
+    /// These options as `reconstruct` arguments (what `batch` passes to each row), with `preset`
+    /// in place of `--preset` where given.
+    pub(crate) fn to_args(&self, preset: Option<Preset>) -> Vec<String> {
+        let mut a = vec![
+            "--preset".to_string(),
+            preset_name(preset.unwrap_or(self.preset)),
+        ];
+        let mut opt = |name: &str, v: Option<String>| {
+            if let Some(v) = v {
+                a.extend([format!("--{name}"), v]);
+            }
+        };
+        opt("iters", self.iters.map(|v| v.to_string()));
+        opt("max-points", self.max_points.map(|v| v.to_string()));
+        opt("seed", self.seed.map(|v| v.to_string()));
+        opt("min-island", self.min_island.map(|v| v.to_string()));
+        opt("owner-band", self.owner_band.map(|v| v.to_string()));
+        opt("raster-res", self.raster_res.map(|v| v.to_string()));
+        opt("depth", self.depth.map(|v| v.to_string()));
+        let gpu = clap::ValueEnum::to_possible_value(&self.gpu)
+            .map_or_else(String::new, |v| v.get_name().to_string());
+        opt("gpu", Some(gpu));
+        a
+    }
+
     fn params(&self) -> Params {
         let mut p = match self.preset {
             Preset::Default => Params::default(),
@@ -281,8 +314,12 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             other.with_context(|| format!("{}: reconstruction failed", args.input.display()))?
         }
     };
-    describe(&out, ui, t.elapsed().as_secs_f64());
+    let seconds = t.elapsed().as_secs_f64();
+    describe(&out, ui, seconds);
     write(&args.output, &out.mesh, ui)?;
+    if let Some(path) = &args.report {
+        write_report(path, &out, seconds)?;
+    }
     if let Some(path) = &args.points {
         let p = &out.points;
         let cloud = rfta::geom::OrientedPoints::new(p.points.clone(), p.normals.clone(), None)
@@ -294,6 +331,34 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             path.display()
         ));
     }
+    Ok(())
+}
+
+/// The report's key figures as one JSON object (the names of [`rfta::Report`]'s fields).
+fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result<()> {
+    let r = &out.report;
+    let c = &r.consistency;
+    let json = serde_json::json!({
+        "seconds": seconds,
+        "samples": r.samples,
+        "negative": r.negative,
+        "vertices": out.mesh.n_vertices(),
+        "faces": out.mesh.n_faces(),
+        "components": r.mesh.components,
+        "watertight": r.mesh.watertight,
+        "spheres_without_point": r.spheres_without_point,
+        "spacing": c.spacing,
+        "sign_errors": c.sign_errors,
+        "entered": c.entered,
+        "gaps": c.gaps,
+        "deepest_entry": c.deepest_entry,
+        "warnings": r.warnings,
+        "stopped_early": r.stopped_early,
+    });
+    rfta_io::write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &json)?;
+        writeln!(w)
+    })?;
     Ok(())
 }
 

@@ -31,6 +31,11 @@ impl Ui {
         }
     }
 
+    /// Whether `-v` was given.
+    pub(crate) fn is_verbose(&self) -> bool {
+        self.verbose
+    }
+
     /// A progress bar over `len` steps (hidden with `-q` or when stderr is not a terminal).
     pub(crate) fn progress(&self, len: u64, what: &str) -> ProgressBar {
         if self.quiet {
@@ -86,6 +91,12 @@ pub(crate) fn mesh_summary(mesh: &rfta_geom::TriMesh) -> String {
         mesh.n_vertices(),
         mesh.n_faces()
     )
+}
+
+/// A line on stdout (results, not messages); a closed pipe is an error `main` ends quietly on.
+pub(crate) fn print_line(msg: &str) -> std::io::Result<()> {
+    use std::io::Write;
+    writeln!(std::io::stdout().lock(), "{msg}")
 }
 
 /// A line on stderr; a closed stderr (`rfta ... 2>&1 | head -1`) is not worth a panic.

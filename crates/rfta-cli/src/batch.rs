@@ -1,0 +1,912 @@
+//! `rfta batch`: `rfta reconstruct` over the rows of a manifest, one shard of it per task of a
+//! job array (Slurm, Kubernetes Indexed Jobs; docs/batch.md).
+//!
+//! Each row runs as a child `rfta reconstruct` process, so that a row's timeout can stop it, a
+//! row that crashes stops nothing else, and every output is the mesh `rfta reconstruct` writes.
+//! Rows are recorded in the shard's status file as they finish (appended and synced), so a killed
+//! shard loses only the rows it was running; a rerun skips the rows whose status says `ok` (or
+//! `skipped`) and whose output exists, and runs the others again.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+
+use crate::reconstruct::{Preset, Tuning};
+use crate::ui::{Ui, parse_bounds};
+
+/// Exit status of a batch in which some rows failed or timed out (every row was tried).
+pub(crate) const SOME_FAILED: u8 = 4;
+
+/// The batch ended with rows that failed or timed out; `main` exits with [`SOME_FAILED`].
+#[derive(Debug)]
+pub(crate) struct SomeFailed(pub(crate) String);
+
+impl std::fmt::Display for SomeFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SomeFailed {}
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct Args {
+    /// The manifest: CSV with a header and columns `input,output`, optionally `bounds` (6 numbers,
+    /// quoted or separated by spaces), `clamp` and `preset` (default, paper, fast), which override
+    /// the options below for their row. Paths are relative to the manifest's folder.
+    #[arg(required_unless_present = "merge")]
+    manifest: Option<PathBuf>,
+    /// Take shard I of N (I from 0): rows I, I+N, I+2N, ... of the manifest.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, default_value = "0/1")]
+    shard: Shard,
+    /// Rows at once; the threads (--threads, default all cores) are split between them.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    jobs: u32,
+    /// Stop a row after this many seconds (status `timeout`); the others go on.
+    #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
+    timeout: Option<f64>,
+    /// The shard's status CSV (default: beside the manifest, MANIFEST.shard-I-of-N.status.csv).
+    /// With --merge: where the merged table goes (default: merged.status.csv beside the first).
+    #[arg(long, value_name = "FILE")]
+    status: Option<PathBuf>,
+    /// List the rows this shard would run, run nothing.
+    #[arg(long)]
+    dry_run: bool,
+    /// Join these status files (of the shards of one manifest) into one table and print totals.
+    #[arg(long, value_name = "STATUS", num_args = 1.., conflicts_with_all = ["manifest", "dry_run"])]
+    merge: Vec<PathBuf>,
+    /// Per row: the SDF was clamped at this magnitude (as `reconstruct --clamp`).
+    #[arg(long)]
+    clamp: Option<f64>,
+    /// Per row: do not inspect the values (as `reconstruct --no-check`).
+    #[arg(long)]
+    no_check: bool,
+    /// Per row: refuse inputs whose estimated peak memory exceeds this (as `reconstruct`).
+    #[arg(long, value_name = "SIZE", value_parser = crate::ui::parse_size)]
+    max_memory: Option<u64>,
+    #[command(flatten)]
+    tuning: Tuning,
+}
+
+/// Shard `index` of `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Shard {
+    index: usize,
+    count: usize,
+}
+
+impl Shard {
+    /// Whether manifest row `row` (0-based, header excluded) belongs to this shard.
+    fn takes(self, row: usize) -> bool {
+        row % self.count == self.index
+    }
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("'{s}': expected I/N, e.g. 0/4"))?;
+    let parse = |t: &str| {
+        t.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("'{s}': '{t}' is not a whole number"))
+    };
+    let (index, count) = (parse(i)?, parse(n)?);
+    if count == 0 || index >= count {
+        return Err(format!(
+            "'{s}': the shard index must be below the shard count (0 <= I < N)"
+        ));
+    }
+    Ok(Shard { index, count })
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a positive number of seconds")),
+    }
+}
+
+/// How a row ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+enum Status {
+    Ok,
+    NoSurface,
+    Failed,
+    Timeout,
+    Skipped,
+}
+
+impl Status {
+    const ALL: [Status; 5] = [
+        Status::Ok,
+        Status::NoSurface,
+        Status::Failed,
+        Status::Timeout,
+        Status::Skipped,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::NoSurface => "no_surface",
+            Status::Failed => "failed",
+            Status::Timeout => "timeout",
+            Status::Skipped => "skipped",
+        }
+    }
+
+    fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|x| x.name() == s)
+    }
+
+    /// A status that fails the batch.
+    fn is_failure(self) -> bool {
+        matches!(self, Status::Failed | Status::Timeout)
+    }
+}
+
+/// The report figures a status row carries (from `reconstruct --report`).
+const FIGURES: [&str; 8] = [
+    "samples",
+    "vertices",
+    "faces",
+    "components",
+    "watertight",
+    "sign_errors",
+    "entered",
+    "gaps",
+];
+
+/// The columns of a status file.
+fn header() -> Vec<String> {
+    ["row", "input", "output", "status", "seconds", "message"]
+        .into_iter()
+        .chain(FIGURES)
+        .map(String::from)
+        .collect()
+}
+
+/// One row of a status file.
+#[derive(Debug, Clone)]
+struct StatusRow {
+    /// The manifest row (0-based, header excluded).
+    row: usize,
+    /// As the manifest says (relative to its folder).
+    input: String,
+    output: String,
+    status: Status,
+    seconds: f64,
+    message: String,
+    /// [`FIGURES`], empty where unknown.
+    figures: Vec<String>,
+}
+
+impl StatusRow {
+    fn fields(&self) -> Vec<String> {
+        [
+            self.row.to_string(),
+            self.input.clone(),
+            self.output.clone(),
+            self.status.name().to_string(),
+            format!("{:.3}", self.seconds),
+            self.message.clone(),
+        ]
+        .into_iter()
+        .chain(self.figures.iter().cloned())
+        .collect()
+    }
+
+    fn parse(fields: &[String], columns: &HashMap<String, usize>) -> Option<Self> {
+        let get = |name: &str| columns.get(name).and_then(|&i| fields.get(i)).cloned();
+        Some(Self {
+            row: get("row")?.parse().ok()?,
+            input: get("input")?,
+            output: get("output")?,
+            status: Status::parse(&get("status")?)?,
+            seconds: get("seconds")?.parse().ok()?,
+            message: get("message").unwrap_or_default(),
+            figures: FIGURES.iter().map(|f| get(f).unwrap_or_default()).collect(),
+        })
+    }
+}
+
+/// What a manifest row's optional columns add.
+#[derive(Debug, Default)]
+struct RowArgs {
+    /// `--bounds`, `--clamp`.
+    args: Vec<String>,
+    /// The row's preset, in place of `--preset`.
+    preset: Option<Preset>,
+}
+
+/// A manifest row: what to run, or why it cannot run.
+#[derive(Debug)]
+struct Job {
+    row: usize,
+    input: String,
+    output: String,
+    /// `reconstruct` arguments from the row's own columns, or the reason the row is bad.
+    extra: std::result::Result<RowArgs, String>,
+}
+
+pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
+    if !args.merge.is_empty() {
+        return merge(&args.merge, args.status.as_deref());
+    }
+    let Some(manifest) = args.manifest.as_deref() else {
+        bail!("give a manifest, or --merge STATUS...");
+    };
+    let base = manifest
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let jobs: Vec<Job> = read_manifest(manifest)?
+        .into_iter()
+        .filter(|j| args.shard.takes(j.row))
+        .collect();
+    if args.dry_run {
+        for j in &jobs {
+            crate::ui::print_line(&format!("{},{},{}", j.row, j.input, j.output))?;
+        }
+        return Ok(());
+    }
+    let status_path = args.status.clone().unwrap_or_else(|| {
+        let stem = manifest
+            .file_stem()
+            .map_or("manifest".into(), |s| s.to_string_lossy().into_owned());
+        base.join(format!(
+            "{stem}.shard-{}-of-{}.status.csv",
+            args.shard.index, args.shard.count
+        ))
+    });
+    // Rows an earlier run of this shard finished: kept (as `skipped`), the file rewritten with
+    // them only, then this run's rows appended as they finish.
+    let done = earlier_rows(&status_path, base)?;
+    let mut status = StatusFile::create(&status_path, &done)?;
+    let todo: Vec<&Job> = jobs
+        .iter()
+        .filter(|j| {
+            !done
+                .iter()
+                .any(|d| d.row == j.row && d.input == j.input && d.output == j.output)
+        })
+        .collect();
+    let cores = threads.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
+    let n_jobs = (args.jobs as usize).min(todo.len()).max(1);
+    let per_row = (cores / n_jobs).max(1);
+    if n_jobs * per_row > cores {
+        ui.say(format!(
+            "warning: {n_jobs} rows at once on {cores} threads oversubscribes the cores"
+        ));
+    }
+    ui.detail(format!(
+        "shard {}/{}: {} rows, {} done by an earlier run; {n_jobs} at once, {per_row} thread(s) each; status in {}",
+        args.shard.index,
+        args.shard.count,
+        jobs.len(),
+        done.len(),
+        status_path.display()
+    ));
+    let runner = Runner {
+        exe: std::env::current_exe().context("cannot find the rfta executable")?,
+        base: base.to_path_buf(),
+        common: common_args(&args, per_row),
+        tuning: args.tuning.clone(),
+        timeout: args.timeout.map(Duration::from_secs_f64),
+    };
+    let bar = ui.progress(jobs.len() as u64, "batch");
+    bar.inc(done.len() as u64);
+    let mut counts: HashMap<Status, usize> = HashMap::new();
+    counts.insert(Status::Skipped, done.len());
+    let t = Instant::now();
+    let next = AtomicUsize::new(0);
+    let (send, receive) = mpsc::channel::<StatusRow>();
+    let mut write_error: Option<anyhow::Error> = None;
+    std::thread::scope(|scope| {
+        for _ in 0..n_jobs {
+            let send = send.clone();
+            let (todo, next, runner) = (&todo, &next, &runner);
+            scope.spawn(move || {
+                while let Some(job) = todo.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    if send.send(runner.run(job)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(send);
+        for row in receive {
+            *counts.entry(row.status).or_default() += 1;
+            let line = format!(
+                "{} {} -> {}: {}{}",
+                row.status.name(),
+                row.input,
+                row.output,
+                if row.message.is_empty() {
+                    format!("{:.2} s", row.seconds)
+                } else {
+                    row.message.clone()
+                },
+                if row.status == Status::Ok {
+                    String::new()
+                } else {
+                    format!(" ({:.2} s)", row.seconds)
+                }
+            );
+            if bar.is_hidden() {
+                ui.say(&line);
+            } else if row.status != Status::Ok || ui.is_verbose() {
+                bar.println(&line);
+            }
+            if let Err(e) = status.append(&row) {
+                // Stop handing out rows: a shard that cannot record them would redo them.
+                next.store(todo.len(), Ordering::Relaxed);
+                write_error.get_or_insert(e);
+            }
+            let failed: usize = Status::ALL
+                .iter()
+                .filter(|s| s.is_failure())
+                .filter_map(|s| counts.get(s))
+                .sum();
+            bar.set_message(format!("{failed} failed"));
+            bar.inc(1);
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = write_error {
+        return Err(e.context(format!("{}: cannot record a row", status_path.display())));
+    }
+    let summary = format!(
+        "shard {}/{}: {} rows in {:.1} s: {}; status in {}",
+        args.shard.index,
+        args.shard.count,
+        jobs.len(),
+        t.elapsed().as_secs_f64(),
+        Status::ALL
+            .iter()
+            .map(|s| format!("{} {}", counts.get(s).copied().unwrap_or(0), s.name()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        status_path.display()
+    );
+    let failed: usize = Status::ALL
+        .iter()
+        .filter(|s| s.is_failure())
+        .filter_map(|s| counts.get(s))
+        .sum();
+    if failed > 0 {
+        return Err(SomeFailed(summary).into());
+    }
+    ui.say(summary);
+    Ok(())
+}
+
+/// The `reconstruct` options every row gets.
+fn common_args(args: &Args, threads: usize) -> Vec<String> {
+    let mut a = vec!["-q".to_string(), "--threads".into(), threads.to_string()];
+    if let Some(c) = args.clamp {
+        a.extend(["--clamp".into(), c.to_string()]);
+    }
+    if args.no_check {
+        a.push("--no-check".into());
+    }
+    if let Some(m) = &args.max_memory {
+        a.extend(["--max-memory".into(), format!("{m}B")]);
+    }
+    a
+}
+
+/// Runs rows as child processes.
+struct Runner {
+    exe: PathBuf,
+    base: PathBuf,
+    common: Vec<String>,
+    tuning: Tuning,
+    timeout: Option<Duration>,
+}
+
+impl Runner {
+    fn run(&self, job: &Job) -> StatusRow {
+        let t = Instant::now();
+        let (status, message, figures) = match &job.extra {
+            Err(why) => (Status::Failed, why.clone(), Vec::new()),
+            Ok(extra) => self.spawn(job, extra),
+        };
+        StatusRow {
+            row: job.row,
+            input: job.input.clone(),
+            output: job.output.clone(),
+            status,
+            seconds: t.elapsed().as_secs_f64(),
+            message,
+            figures: if figures.is_empty() {
+                vec![String::new(); FIGURES.len()]
+            } else {
+                figures
+            },
+        }
+    }
+
+    fn spawn(&self, job: &Job, extra: &RowArgs) -> (Status, String, Vec<String>) {
+        let output = self.base.join(&job.output);
+        if let Some(dir) = output.parent()
+            && let Err(e) = std::fs::create_dir_all(dir)
+        {
+            return (
+                Status::Failed,
+                format!("cannot create {}: {e}", dir.display()),
+                Vec::new(),
+            );
+        }
+        let report = std::env::temp_dir().join(format!(
+            "rfta-batch-{}-{}.json",
+            std::process::id(),
+            job.row
+        ));
+        let _ = std::fs::remove_file(&report);
+        let mut command = Command::new(&self.exe);
+        command
+            .arg("reconstruct")
+            .arg(self.base.join(&job.input))
+            .arg("-o")
+            .arg(&output)
+            .arg("--report")
+            .arg(&report)
+            .args(&self.common)
+            .args(self.tuning.to_args(extra.preset))
+            .args(&extra.args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        let mut child = match command.spawn() {
+            Ok(c) => c,
+            Err(e) => {
+                return (
+                    Status::Failed,
+                    format!("cannot start {}: {e}", self.exe.display()),
+                    Vec::new(),
+                );
+            }
+        };
+        // Drained on the side: a child blocked on a full pipe would look like a timeout.
+        let stderr = child.stderr.take().map(|mut pipe| {
+            std::thread::spawn(move || {
+                let mut text = String::new();
+                let _ = pipe.read_to_string(&mut text);
+                text
+            })
+        });
+        let ended = wait(&mut child, self.timeout);
+        let text = stderr
+            .and_then(|h| h.join().ok())
+            .unwrap_or_default()
+            .trim()
+            .to_string();
+        // The error line (`main` prints its chain on one line; clap's usage errors have more
+        // lines after it), else the last line.
+        let last = text
+            .lines()
+            .rfind(|l| l.starts_with("error:") || l.starts_with("no surface:"))
+            .or_else(|| text.lines().last())
+            .unwrap_or("")
+            .to_string();
+        let result = match ended {
+            Ended::TimedOut(after) => {
+                // A killed writer may leave its temporary file (never the output).
+                if let (Some(dir), Some(name)) = (output.parent(), output.file_name()) {
+                    let _ = std::fs::remove_file(dir.join(format!(
+                        ".{}.{}.tmp",
+                        name.to_string_lossy(),
+                        child.id()
+                    )));
+                }
+                (
+                    Status::Timeout,
+                    format!("stopped after {:.1} s", after.as_secs_f64()),
+                    Vec::new(),
+                )
+            }
+            Ended::Code(0) => (Status::Ok, String::new(), figures(&report)),
+            Ended::Code(3) => (
+                Status::NoSurface,
+                last.strip_prefix("no surface: ")
+                    .unwrap_or(&last)
+                    .to_string(),
+                Vec::new(),
+            ),
+            Ended::Code(c) => (
+                Status::Failed,
+                if last.is_empty() {
+                    format!("exit status {c}")
+                } else {
+                    last.strip_prefix("error: ").unwrap_or(&last).to_string()
+                },
+                Vec::new(),
+            ),
+            Ended::Signal(why) => (Status::Failed, why, Vec::new()),
+        };
+        let _ = std::fs::remove_file(&report);
+        result
+    }
+}
+
+enum Ended {
+    Code(i32),
+    Signal(String),
+    TimedOut(Duration),
+}
+
+/// Waits for `child`, killing it after `timeout`.
+fn wait(child: &mut Child, timeout: Option<Duration>) -> Ended {
+    let t = Instant::now();
+    loop {
+        match child.try_wait() {
+            Ok(Some(status)) => {
+                return match status.code() {
+                    Some(c) => Ended::Code(c),
+                    None => Ended::Signal(format!("the process ended abnormally ({status})")),
+                };
+            }
+            Ok(None) => {}
+            Err(e) => return Ended::Signal(format!("cannot wait for the process: {e}")),
+        }
+        if let Some(limit) = timeout
+            && t.elapsed() >= limit
+        {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Ended::TimedOut(t.elapsed());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// The status row's figures from a `reconstruct --report` file (empty where it is unreadable).
+fn figures(report: &Path) -> Vec<String> {
+    let json: Option<serde_json::Value> = std::fs::read(report)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok());
+    FIGURES
+        .iter()
+        .map(|f| {
+            json.as_ref()
+                .and_then(|j| j.get(f))
+                .map(|v| v.to_string())
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// The manifest's rows. A row that cannot run (a missing path, a bad bound, clamp or preset)
+/// is kept with the reason, so that it ends as `failed` with the rest going on.
+fn read_manifest(path: &Path) -> Result<Vec<Job>> {
+    let file = File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
+    let mut lines = BufReader::new(file).lines();
+    let head = match lines.next() {
+        Some(l) => l.with_context(|| format!("{}: cannot read", path.display()))?,
+        None => bail!(
+            "{}: empty manifest (expected a header input,output)",
+            path.display()
+        ),
+    };
+    let columns: HashMap<String, usize> = split_csv(&head)
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| (c.trim().to_ascii_lowercase(), i))
+        .collect();
+    for needed in ["input", "output"] {
+        if !columns.contains_key(needed) {
+            bail!(
+                "{}: the header has no '{needed}' column (found: {})",
+                path.display(),
+                head.trim()
+            );
+        }
+    }
+    let mut jobs = Vec::new();
+    for (row, line) in lines.enumerate() {
+        let line = line.with_context(|| format!("{}: cannot read", path.display()))?;
+        if line.trim().is_empty() {
+            // Blank lines still count as rows, so shards stay stable when they are filled in.
+            jobs.push(Job {
+                row,
+                input: String::new(),
+                output: String::new(),
+                extra: Err("empty row".into()),
+            });
+            continue;
+        }
+        let fields = split_csv(&line);
+        let get = |name: &str| {
+            columns
+                .get(name)
+                .and_then(|&i| fields.get(i))
+                .map(|f| f.trim().to_string())
+                .filter(|f| !f.is_empty())
+        };
+        let (input, output) = (get("input"), get("output"));
+        let extra = match (&input, &output) {
+            (Some(_), Some(_)) => row_args(get("bounds"), get("clamp"), get("preset")),
+            _ => Err("the row needs both an input and an output".into()),
+        };
+        jobs.push(Job {
+            row,
+            input: input.unwrap_or_default(),
+            output: output.unwrap_or_default(),
+            extra,
+        });
+    }
+    Ok(jobs)
+}
+
+/// `reconstruct` arguments from a row's optional columns.
+fn row_args(
+    bounds: Option<String>,
+    clamp: Option<String>,
+    preset: Option<String>,
+) -> std::result::Result<RowArgs, String> {
+    let mut a = Vec::new();
+    if let Some(b) = bounds {
+        let joined = b
+            .split([',', ' ', ';'])
+            .filter(|t| !t.is_empty())
+            .collect::<Vec<_>>();
+        let joined = joined.join(",");
+        parse_bounds(&joined).map_err(|e| format!("bounds: {e}"))?;
+        a.push(format!("--bounds={joined}"));
+    }
+    if let Some(c) = clamp {
+        match c.parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => a.extend(["--clamp".into(), c]),
+            _ => return Err(format!("clamp: '{c}' is not a positive number")),
+        }
+    }
+    let preset = preset
+        .map(|p| {
+            <Preset as clap::ValueEnum>::from_str(&p, true)
+                .map_err(|_| format!("preset: '{p}' is not one of default, paper, fast"))
+        })
+        .transpose()?;
+    Ok(RowArgs { args: a, preset })
+}
+
+/// Splits one CSV line (RFC 4180 quoting: fields in double quotes may hold commas, `""` is a
+/// quote).
+fn split_csv(line: &str) -> Vec<String> {
+    let mut fields = Vec::new();
+    let mut field = String::new();
+    let mut quoted = false;
+    let mut chars = line.trim_end_matches(['\r', '\n']).chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                field.push('"');
+                chars.next();
+            }
+            ('"', true) => quoted = false,
+            ('"', false) if field.trim().is_empty() => {
+                field.clear();
+                quoted = true;
+            }
+            (',', false) => fields.push(std::mem::take(&mut field)),
+            _ => field.push(c),
+        }
+    }
+    fields.push(field);
+    fields
+}
+
+/// One CSV line, quoting the fields that need it.
+fn join_csv(fields: &[String]) -> String {
+    fields
+        .iter()
+        .map(|f| {
+            let f = f.replace(['\n', '\r'], " ");
+            if f.contains([',', '"']) {
+                format!("\"{}\"", f.replace('"', "\"\""))
+            } else {
+                f
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The rows of a status file (none if it does not exist).
+fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
+    };
+    let mut lines = text.lines();
+    let Some(head) = lines.next() else {
+        return Ok(Vec::new());
+    };
+    let columns: HashMap<String, usize> = split_csv(head)
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| (c, i))
+        .collect();
+    if !["row", "input", "output", "status"]
+        .iter()
+        .all(|c| columns.contains_key(*c))
+    {
+        bail!(
+            "{}: not an rfta batch status file (header: {head})",
+            path.display()
+        );
+    }
+    // A line cut short by a kill is dropped: its row runs again.
+    Ok(lines
+        .filter_map(|l| StatusRow::parse(&split_csv(l), &columns))
+        .collect())
+}
+
+/// The rows of an earlier run that need not run again: the last word on each row is `ok` or
+/// `skipped` and its output exists. Returned as `skipped`.
+fn earlier_rows(path: &Path, base: &Path) -> Result<Vec<StatusRow>> {
+    let mut last: HashMap<usize, StatusRow> = HashMap::new();
+    for r in read_status(path)? {
+        last.insert(r.row, r);
+    }
+    let mut done: Vec<StatusRow> = last
+        .into_values()
+        .filter(|r| matches!(r.status, Status::Ok | Status::Skipped))
+        .filter(|r| base.join(&r.output).is_file())
+        .map(|mut r| {
+            if r.status == Status::Ok {
+                r.status = Status::Skipped;
+                r.message = format!("done by an earlier run in {:.2} s", r.seconds);
+            }
+            r
+        })
+        .collect();
+    done.sort_by_key(|r| r.row);
+    Ok(done)
+}
+
+/// A status file written a row at a time.
+struct StatusFile {
+    file: File,
+}
+
+impl StatusFile {
+    /// Starts `path` afresh (atomically) with `rows`, then opens it for appending.
+    fn create(path: &Path, rows: &[StatusRow]) -> Result<Self> {
+        rfta_io::write_atomic(path, |w| {
+            writeln!(w, "{}", join_csv(&header()))?;
+            for r in rows {
+                writeln!(w, "{}", join_csv(&r.fields()))?;
+            }
+            Ok(())
+        })?;
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .with_context(|| format!("{}: cannot open for appending", path.display()))?;
+        Ok(Self { file })
+    }
+
+    fn append(&mut self, row: &StatusRow) -> Result<()> {
+        writeln!(self.file, "{}", join_csv(&row.fields()))?;
+        self.file.sync_data()?;
+        Ok(())
+    }
+}
+
+/// `--merge`: the rows of every status file, in manifest order, with totals.
+fn merge(paths: &[PathBuf], out: Option<&Path>) -> Result<()> {
+    let mut rows: Vec<StatusRow> = Vec::new();
+    for p in paths {
+        rows.extend(read_status(p)?);
+        if !p.is_file() {
+            bail!("{}: no such status file", p.display());
+        }
+    }
+    // The last word on a row wins (a rerun appends after the row it redoes).
+    let mut last: HashMap<usize, StatusRow> = HashMap::new();
+    for r in rows {
+        last.insert(r.row, r);
+    }
+    let mut rows: Vec<StatusRow> = last.into_values().collect();
+    rows.sort_by_key(|r| r.row);
+    let out = out.map_or_else(
+        || {
+            paths[0]
+                .parent()
+                .unwrap_or(Path::new("."))
+                .join("merged.status.csv")
+        },
+        Path::to_path_buf,
+    );
+    rfta_io::write_atomic(&out, |w| {
+        writeln!(w, "{}", join_csv(&header()))?;
+        for r in &rows {
+            writeln!(w, "{}", join_csv(&r.fields()))?;
+        }
+        Ok(())
+    })?;
+    let mut table = String::from("| status | rows | seconds |\n|---|---|---|\n");
+    for s in Status::ALL {
+        let these: Vec<&StatusRow> = rows.iter().filter(|r| r.status == s).collect();
+        if !these.is_empty() {
+            table += &format!(
+                "| {} | {} | {:.1} |\n",
+                s.name(),
+                these.len(),
+                these.iter().map(|r| r.seconds).sum::<f64>()
+            );
+        }
+    }
+    table += &format!(
+        "| all | {} | {:.1} |\n",
+        rows.len(),
+        rows.iter().map(|r| r.seconds).sum::<f64>()
+    );
+    crate::ui::print_line(&format!(
+        "{} rows from {} status file(s), merged into {}\n\n{table}",
+        rows.len(),
+        paths.len(),
+        out.display()
+    ))?;
+    if rows.iter().any(|r| r.status.is_failure()) {
+        return Err(SomeFailed(format!(
+            "{} row(s) failed or timed out",
+            rows.iter().filter(|r| r.status.is_failure()).count()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_quotes_round_trip() {
+        let fields: Vec<String> = ["a", "b,c", "say \"hi\"", ""]
+            .into_iter()
+            .map(String::from)
+            .collect();
+        assert_eq!(split_csv(&join_csv(&fields)), fields);
+        assert_eq!(split_csv("x, \"1,2\" ,y"), ["x", "1,2 ", "y"]);
+    }
+
+    #[test]
+    fn shards_cover_every_row_once() {
+        for count in 1..7 {
+            for row in 0..50 {
+                let owners = (0..count)
+                    .filter(|&index| Shard { index, count }.takes(row))
+                    .count();
+                assert_eq!(owners, 1, "row {row} of {count} shards");
+            }
+        }
+        assert!(parse_shard("3/3").is_err());
+        assert!(parse_shard("1/0").is_err());
+        assert_eq!(parse_shard("2/5"), Ok(Shard { index: 2, count: 5 }));
+    }
+
+    #[test]
+    fn bad_row_columns_are_reasons_not_errors() {
+        assert!(row_args(Some("0 0 0 1 1".into()), None, None).is_err());
+        assert!(row_args(None, Some("-1".into()), None).is_err());
+        assert!(row_args(None, None, Some("fastest".into())).is_err());
+        let row = row_args(Some("-1 -1 -1 1 1 1".into()), None, Some("Fast".into()));
+        let row = row.expect("a good row");
+        assert_eq!(row.args, ["--bounds=-1,-1,-1,1,1,1"]);
+        assert!(matches!(row.preset, Some(Preset::Fast)));
+    }
+}
