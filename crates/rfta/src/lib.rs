@@ -66,6 +66,8 @@ pub use params::{
 };
 pub use report::{MeshCheck, Reconstruction, Report, Stage};
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rfta_geom::SdfSamples;
 
 /// Errors of a reconstruction.
@@ -134,6 +136,9 @@ pub enum Error {
         /// Why.
         reason: String,
     },
+    /// The caller's cancel flag was set ([`reconstruct_cancellable`]).
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// Result alias of this crate.
@@ -160,10 +165,25 @@ pub fn reconstruct_with_progress(
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<Reconstruction> {
+    reconstruct_cancellable(samples, params, progress, &AtomicBool::new(false))
+}
+
+/// [`reconstruct_with_progress`] that gives up with [`Error::Cancelled`] once `cancel` is set:
+/// the flag is read before each stage and each fine-tuning round (an interactive caller's Ctrl-C,
+/// a deadline), so a stage under way finishes first.
+///
+/// # Errors
+/// As [`reconstruct`], and [`Error::Cancelled`].
+pub fn reconstruct_cancellable(
+    samples: &SdfSamples,
+    params: &Params,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
+) -> Result<Reconstruction> {
     params.validate()?;
     check_memory(samples.len(), params)?;
     match params.threads {
-        None => run(samples, params, progress),
+        None => run(samples, params, progress, cancel),
         Some(t) => rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build()
@@ -171,7 +191,7 @@ pub fn reconstruct_with_progress(
                 threads: t,
                 reason: e.to_string(),
             })?
-            .install(|| run(samples, params, progress)),
+            .install(|| run(samples, params, progress, cancel)),
     }
 }
 
@@ -180,7 +200,15 @@ fn run(
     samples: &SdfSamples,
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
 ) -> Result<Reconstruction> {
+    let go_on = || {
+        if cancel.load(Ordering::Relaxed) {
+            Err(Error::Cancelled)
+        } else {
+            Ok(())
+        }
+    };
     let mut report = Report {
         samples: samples.len(),
         clamp: params.clamp,
@@ -189,9 +217,11 @@ fn run(
     if params.check {
         check::samples(samples, params, &mut report)?;
     }
+    go_on()?;
     let unit = normalize::UnitBox::new(samples, report.clamp);
     let cloud = initial::initial_points(&unit, params, &mut report, progress)?;
     let mut rounds = rounds::Rounds::new(&unit, params, cloud);
-    rounds.run(&unit, params, &mut report, progress);
+    rounds.run(&unit, params, &mut report, progress, &go_on)?;
+    go_on()?;
     finish::finish(samples, &unit, params, rounds, report, progress)
 }

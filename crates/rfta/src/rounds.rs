@@ -36,14 +36,16 @@ impl Rounds {
     }
 
     /// Runs the fine-tuning rounds, stopping early (and saying why in the report) when a solve
-    /// fails or fewer than 3 points remain.
+    /// fails or fewer than 3 points remain, and with [`crate::Error::Cancelled`] when `go_on`
+    /// says so before a round.
     pub(crate) fn run(
         &mut self,
         unit: &UnitBox,
         params: &Params,
         report: &mut Report,
         progress: &mut (dyn FnMut(Stage) + Send),
-    ) {
+        go_on: &dyn Fn() -> crate::Result<()>,
+    ) -> crate::Result<()> {
         let n = unit.len();
         report.spsr_depth = self.spsr.depth;
         // Without batching every round tests against the same tree: built once.
@@ -51,6 +53,7 @@ impl Rounds {
             self.all = Some(SphereTree::new(&unit.spheres));
         }
         for round in 1..=params.rounds {
+            go_on()?;
             progress(Stage::FineTune {
                 round,
                 of: params.rounds,
@@ -109,6 +112,7 @@ impl Rounds {
             }
             self.cloud = next;
         }
+        Ok(())
     }
 }
 

@@ -454,3 +454,34 @@ fn the_final_solve_puts_every_sample_on_its_side() {
     assert_eq!(r.consistency.sign_errors, 0, "{:?}", r.consistency);
     assert!(r.mesh.watertight);
 }
+
+/// A cancel flag set during the second round stops the reconstruction before the third, with
+/// `Error::Cancelled`; the same call with the flag never set finishes.
+#[test]
+fn a_cancel_flag_stops_the_reconstruction_between_rounds() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let samples = grid_samples(Analytic::Sphere { radius: 0.5 }, 12);
+    let params = Params {
+        rounds: 5,
+        ..Params::default()
+    };
+    let cancel = AtomicBool::new(false);
+    let mut rounds_started = 0;
+    let out = rfta::reconstruct_cancellable(
+        &samples,
+        &params,
+        &mut |stage| {
+            if let rfta::Stage::FineTune { round, .. } = stage {
+                rounds_started = round;
+                if round == 2 {
+                    cancel.store(true, Ordering::Relaxed);
+                }
+            }
+        },
+        &cancel,
+    );
+    assert!(matches!(out, Err(rfta::Error::Cancelled)), "{out:?}");
+    assert_eq!(rounds_started, 2);
+    let never = AtomicBool::new(false);
+    assert!(rfta::reconstruct_cancellable(&samples, &params, &mut |_| {}, &never).is_ok());
+}
