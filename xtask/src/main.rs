@@ -1,6 +1,7 @@
 //! Project automation, run as `cargo xtask <command>`:
 //!
-//! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, shaders, tidy, a quick eval.
+//! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, the Python package's tests,
+//!   shaders, tidy, a quick eval.
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `tidy`: repository rules (see [`tidy`]).
 //! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
@@ -27,7 +28,8 @@ const HELP: &str = "\
 cargo xtask <command>
 
 commands:
-  ci        fmt --check, clippy -D warnings, tests, docs -D warnings, shaders, tidy, eval --quick (mc, rfta)
+  ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
+            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta)
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
@@ -58,6 +60,54 @@ fn main() -> Result<()> {
         }
         Some(other) => bail!("unknown command '{other}'\n\n{HELP}"),
     }
+}
+
+/// Builds the Python package from `crates/rfta-py` into a fresh virtual environment (pip and
+/// maturin from PyPI) and runs its tests, the CLI comparison against the debug `rfta` the test
+/// step built.
+fn python(root: &Path, cargo: &str) -> Result<()> {
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    let venv = target.join("py-venv");
+    let _ = std::fs::remove_dir_all(&venv);
+    let python = std::env::var("PYTHON").unwrap_or_else(|_| "python3".into());
+    let run = |program: &Path, args: &[&str], env: &[(&str, &Path)]| -> Result<()> {
+        let status = Command::new(program)
+            .args(args)
+            .envs(env.iter().map(|(k, v)| (*k, v.as_os_str())))
+            .current_dir(root)
+            .status()
+            .with_context(|| format!("cannot run {}", program.display()))?;
+        if !status.success() {
+            bail!("{} {} failed ({status})", program.display(), args.join(" "));
+        }
+        Ok(())
+    };
+    run(
+        Path::new(&python),
+        &["-m", "venv", &venv.display().to_string()],
+        &[],
+    )?;
+    let bin = venv.join("bin");
+    run(
+        &bin.join("pip"),
+        &["install", "-q", "crates/rfta-py[test]"],
+        &[],
+    )?;
+    // The binary the pytest CLI comparison runs: the one `cargo test` built.
+    let status = Command::new(cargo)
+        .args(["build", "-q", "-p", "rfta-cli"])
+        .current_dir(root)
+        .status()?;
+    if !status.success() {
+        bail!("cargo build -p rfta-cli failed ({status})");
+    }
+    let rfta_bin = target.join("debug").join("rfta");
+    run(
+        &bin.join("pytest"),
+        &["-q", "crates/rfta-py/tests"],
+        &[("RFTA_BIN", &rfta_bin)],
+    )
 }
 
 /// The repository root (the parent of this crate's directory).
@@ -108,6 +158,8 @@ fn ci(root: &Path) -> Result<()> {
             bail!("step '{name}' failed ({status})");
         }
     }
+    println!("==> python: the rfta package built into a fresh venv, then pytest");
+    python(root, &cargo)?;
     println!("==> shaders");
     shaders::run(root)?;
     println!("==> tidy");

@@ -90,6 +90,56 @@ impl Grid {
         Self::from_bounds([d; 3], DVec3::splat(lo), DVec3::splat(hi))
     }
 
+    /// The grid whose points `positions` are, in any order, with the flat index of each
+    /// position in it: how a grid passed as a list of points (numpy's `meshgrid` flattened, in
+    /// any axis order) is recognised. `None` unless every position is a grid point (to 10^-6 of
+    /// the spacing), each grid point appears exactly once, and every axis has at least 2 points.
+    pub fn fit(positions: &[DVec3]) -> Option<(Self, Vec<usize>)> {
+        let mut dims = [0; 3];
+        let (mut origin, mut spacing) = (DVec3::ZERO, DVec3::ZERO);
+        for a in 0..3 {
+            let mut c: Vec<f64> = positions.iter().map(|p| p[a]).collect();
+            if c.iter().any(|x| !x.is_finite()) {
+                return None;
+            }
+            c.sort_by(f64::total_cmp);
+            let (lo, hi) = (*c.first()?, *c.last()?);
+            let merge = 1e-9 * (hi - lo).abs().max(f64::MIN_POSITIVE);
+            c.dedup_by(|b, a| *b - *a <= merge);
+            let n = c.len();
+            if n < 2 {
+                return None;
+            }
+            let h = (hi - lo) / (n - 1) as f64;
+            if c.iter()
+                .enumerate()
+                .any(|(j, &x)| (x - (lo + j as f64 * h)).abs() > 1e-6 * h)
+            {
+                return None;
+            }
+            (dims[a], origin[a], spacing[a]) = (n, lo, h);
+        }
+        if dims.iter().try_fold(1usize, |t, &d| t.checked_mul(d)) != Some(positions.len()) {
+            return None;
+        }
+        let grid = Self::new(dims, origin, spacing).ok()?;
+        let mut seen = vec![false; positions.len()];
+        let mut index = Vec::with_capacity(positions.len());
+        for p in positions {
+            let t = (*p - origin) / spacing;
+            let ijk = t.round();
+            if (t - ijk).abs().max_element() > 1e-6 {
+                return None;
+            }
+            let i = grid.index(ijk.x as usize, ijk.y as usize, ijk.z as usize);
+            if std::mem::replace(&mut seen[i], true) {
+                return None;
+            }
+            index.push(i);
+        }
+        Some((grid, index))
+    }
+
     /// Points per axis.
     pub fn dims(&self) -> [usize; 3] {
         self.dims
@@ -377,6 +427,38 @@ fn validate_values(values: &[f64]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A grid's points, shuffled and in another axis order, are recognised as that grid, each
+    /// with its own index; a point off the grid, a missing point or a repeated one is not a grid.
+    #[test]
+    fn fit_recognises_a_grid_in_any_order() {
+        let g = Grid::from_bounds(
+            [4, 3, 5],
+            DVec3::new(-1.0, 0.0, 2.0),
+            DVec3::new(0.5, 1.0, 3.0),
+        )
+        .expect("valid");
+        let mut rng = crate::rng::Rng::new(7);
+        let mut order: Vec<usize> = (0..g.len()).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, rng.below(i as u64 + 1) as usize);
+        }
+        let points: Vec<DVec3> = order.iter().map(|&i| g.position(i)).collect();
+        let (fit, index) = Grid::fit(&points).expect("a grid");
+        assert_eq!(fit.dims(), g.dims());
+        assert!((fit.origin() - g.origin()).abs().max_element() < 1e-12);
+        assert!((fit.spacing() - g.spacing()).abs().max_element() < 1e-12);
+        assert_eq!(index, order);
+
+        let mut off = points.clone();
+        off[5].x += 0.3 * g.spacing().x;
+        assert!(Grid::fit(&off).is_none());
+        assert!(Grid::fit(&points[1..]).is_none());
+        let mut repeated = points.clone();
+        repeated[0] = repeated[1];
+        assert!(Grid::fit(&repeated).is_none());
+        assert!(Grid::fit(&[DVec3::ZERO; 1]).is_none());
+    }
 
     #[test]
     fn grid_layout_is_c_order_z_fastest_like_numpy_linspace() {

@@ -1,0 +1,390 @@
+"""Reach for the Arcs: triangle meshes from signed distance samples.
+
+Sellán, Ren, Batty and Stein, "Reach For the Arcs: Reconstructing Surfaces from SDFs via Tangent
+Points", SIGGRAPH 2024, implemented in Rust (the rfta repository, crates/rfta-py).
+
+Two ways in:
+
+- ``reach_for_the_arcs(U, S, ...)``: gpytoolbox's function, argument for argument, so that
+  changing the import is the whole migration.
+- ``reconstruct(S, bounds=..., preset="default", ...)``: a grid of values (or scattered samples)
+  in, a ``Reconstruction`` (vertices, faces, tangency points, report) out.
+
+Beside them: ``screened_poisson``, ``marching_cubes``, ``signed_distance``, ``sample_sdf``.
+
+Arrays may be float32 or float64, in any memory layout; results are float64 vertices and int64
+faces. Long calls release the GIL (other Python threads run), stop on Ctrl-C between stages
+(``KeyboardInterrupt``), and raise ``ValueError`` for bad input (``NoSurfaceError``, a
+``ValueError``, when the samples describe no surface) or ``RuntimeError`` with the library's
+message. Results do not depend on the thread count.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _rfta
+from ._rfta import NoSurfaceError
+
+__version__: str = _rfta.__version__
+
+__all__ = [
+    "NoSurfaceError",
+    "Reconstruction",
+    "marching_cubes",
+    "reach_for_the_arcs",
+    "reconstruct",
+    "sample_sdf",
+    "screened_poisson",
+    "signed_distance",
+]
+
+Bounds = Union[float, Sequence[float], Sequence[Sequence[float]], None]
+Progress = Callable[[str, int, int], Any]
+
+
+def _finite(name: str, a: np.ndarray) -> None:
+    bad = ~np.isfinite(a)
+    if bad.any():
+        first = np.unravel_index(int(np.argmax(bad)), a.shape)
+        raise ValueError(
+            f"{name} has {int(bad.sum())} value(s) that are NaN or infinite "
+            f"(the first at index {tuple(int(i) for i in first)})"
+        )
+
+
+def _array(name: str, a: Any, ndim: int, dtype: Any = np.float64) -> np.ndarray:
+    try:
+        out = np.ascontiguousarray(a, dtype=dtype)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{name} must be a numeric array: {e}") from None
+    if out.ndim != ndim:
+        raise ValueError(f"{name} must have {ndim} dimension(s), not shape {out.shape}")
+    if dtype == np.float64:
+        _finite(name, out)
+    return out
+
+
+def _rows(name: str, a: Any) -> np.ndarray:
+    out = _array(name, a, 2)
+    if out.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (n, 3), not {out.shape}")
+    return out
+
+
+def _faces(F: Any) -> np.ndarray:
+    f = np.asarray(F)
+    if not np.issubdtype(f.dtype, np.integer):
+        raise ValueError(f"F must hold integer vertex indices, not {f.dtype}")
+    f = np.ascontiguousarray(f, dtype=np.int64)
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"F must have shape (m, 3), not {f.shape}")
+    return f
+
+
+def _bounds(bounds: Bounds) -> Tuple[list, list]:
+    """(lo, hi) corners from None ([-1, 1]^3), (lo, hi) scalars, two corners, or 6 numbers."""
+    if bounds is None:
+        return [-1.0] * 3, [1.0] * 3
+    b = np.asarray(bounds, dtype=np.float64)
+    if b.shape == (2,):
+        lo, hi = [float(b[0])] * 3, [float(b[1])] * 3
+    elif b.shape == (2, 3):
+        lo, hi = [float(x) for x in b[0]], [float(x) for x in b[1]]
+    elif b.shape == (6,):
+        lo, hi = [float(x) for x in b[:3]], [float(x) for x in b[3:]]
+    else:
+        raise ValueError(
+            "bounds must be (lo, hi), ((xmin, ymin, zmin), (xmax, ymax, zmax)) or 6 numbers, "
+            f"not an array of shape {b.shape}"
+        )
+    if not all(math.isfinite(x) for x in lo + hi) or any(a >= c for a, c in zip(lo, hi)):
+        raise ValueError(f"bounds must be finite with min < max on every axis: {lo} .. {hi}")
+    return lo, hi
+
+
+def _printer(verbose: bool, progress: Optional[Progress]) -> Optional[Progress]:
+    if progress is not None and not callable(progress):
+        raise ValueError("progress must be a callable (stage, done, of)")
+    if not verbose:
+        return progress
+
+    def report(stage: str, done: int, of: int) -> None:
+        if stage != "progress":
+            print(f" --- rfta: {stage}", flush=True)
+        if progress is not None:
+            progress(stage, done, of)
+
+    return report
+
+
+@dataclass
+class Reconstruction:
+    """A reconstructed mesh with its tangency points and the library's report."""
+
+    vertices: np.ndarray
+    """(n, 3) float64 vertex positions, in the samples' coordinates."""
+    faces: np.ndarray
+    """(m, 3) int64 triangles, outward-oriented."""
+    points: np.ndarray
+    """(p, 3) float64 final tangency points."""
+    normals: np.ndarray
+    """(p, 3) float64 unit normals of the tangency points."""
+    report: dict = field(default_factory=dict)
+    """What the reconstruction did: counts, agreement with the samples (``sign_errors``,
+    ``entered``, ``gaps``), ``warnings``, ``timings`` in seconds."""
+
+    def to_trimesh(self) -> Any:
+        """The mesh as a ``trimesh.Trimesh`` (needs the ``trimesh`` package)."""
+        try:
+            import trimesh
+        except ImportError:
+            raise ImportError("to_trimesh needs trimesh: pip install trimesh") from None
+        return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, process=False)
+
+
+def _run(
+    S: np.ndarray,
+    positions: Optional[np.ndarray],
+    grid: Optional[Tuple[Sequence[int], list, list]],
+    preset: str,
+    options: dict,
+    progress: Optional[Progress],
+) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
+    if grid is None:
+        return _rfta.reconstruct(
+            S, positions=positions, preset=preset, options=options, progress=progress
+        )
+    dims, lo, hi = grid
+    return _rfta.reconstruct(
+        S, dims=list(dims), lo=lo, hi=hi, preset=preset, options=options, progress=progress
+    )
+
+
+def reconstruct(
+    S: Any,
+    bounds: Bounds = None,
+    preset: str = "default",
+    *,
+    points: Any = None,
+    rounds: Optional[int] = None,
+    max_points_per_sphere: Optional[int] = None,
+    seed: Optional[int] = None,
+    clamp: Optional[float] = None,
+    check: bool = True,
+    depth: Optional[int] = None,
+    screening: Optional[float] = None,
+    owner_band: Optional[float] = None,
+    raster_resolution: Optional[int] = None,
+    min_island: Optional[float] = None,
+    threads: Optional[int] = None,
+    progress: Optional[Progress] = None,
+    verbose: bool = False,
+) -> Reconstruction:
+    """Reconstructs a mesh from signed distance samples (negative inside).
+
+    Parameters
+    ----------
+    S : (nx, ny, nz) array
+        The values on a grid: ``S[i, j, k]`` at ``linspace(lo, hi, n)`` on each axis (numpy's
+        ``meshgrid(..., indexing="ij")``). Or, with ``points``, one value per point.
+    bounds : (lo, hi), ((xmin, ymin, zmin), (xmax, ymax, zmax)) or 6 numbers
+        The grid's corner points (default [-1, 1]^3). Ignored with ``points``.
+    preset : "default", "paper" or "fast"
+        The paper's defaults (10 fine-tuning rounds), its Table 2 (20 rounds, 30 points per
+        sphere), or gpytoolbox's defaults (3 rounds). The keywords below override it.
+    points : (n, 3) array, optional
+        Scattered sample positions (``S`` then has shape (n,)).
+    rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
+    raster_resolution, min_island, threads
+        As ``rfta reconstruct``'s options of the same names (``rfta reconstruct --help``).
+    check : bool
+        Refuse values that are not a signed distance (and detect a clamp); False to go on.
+    progress : callable(stage, done, of), optional
+        Called as stages start and about twice a second within a long stage.
+    verbose : bool
+        Print each stage as it starts.
+
+    Returns
+    -------
+    Reconstruction
+    """
+    if points is None:
+        S = _array("S", S, 3)
+        lo, hi = _bounds(bounds)
+        positions, grid = None, (S.shape, lo, hi)
+    else:
+        positions = _rows("points", points)
+        S = _array("S", S, 1)
+        grid = None
+    options = dict(
+        rounds=rounds,
+        max_points_per_sphere=max_points_per_sphere,
+        seed=seed,
+        clamp=clamp,
+        check=check,
+        depth=depth,
+        screening=screening,
+        owner_band=owner_band,
+        raster_resolution=raster_resolution,
+        min_island=min_island,
+        threads=threads,
+    )
+    V, F, P, N, report = _run(
+        S.ravel(), positions, grid, preset, options, _printer(verbose, progress)
+    )
+    return Reconstruction(V, F, P, N, report)
+
+
+def reach_for_the_arcs(
+    U: Any,
+    S: Any,
+    rng_seed: int = 3452,
+    return_point_cloud: bool = False,
+    fine_tune_iters: int = 3,
+    batch_size: int = 10000,
+    num_rasterization_spheres: int = 0,
+    screening_weight: float = 10.0,
+    rasterization_resolution: Optional[int] = None,
+    max_points_per_sphere: int = 3,
+    n_local_searches: Optional[int] = None,
+    local_search_iters: int = 20,
+    local_search_t: float = 0.01,
+    tol: float = 1e-4,
+    clamp_value: float = np.inf,
+    force_cpu: bool = False,
+    parallel: bool = False,
+    verbose: bool = False,
+):
+    """gpytoolbox's ``reach_for_the_arcs``, argument for argument.
+
+    Parameters
+    ----------
+    U : (n, 3) array
+        Sample positions: scattered, or the points of a grid in any order (a grid is recognised
+        and reconstructed as one, which is more accurate and faster).
+    S : (n,) array
+        The signed distance at each point, negative inside.
+    rng_seed : int
+        Seed of every random choice.
+    return_point_cloud : bool
+        Also return the tangency points and their normals.
+    fine_tune_iters : int
+        Fine-tuning rounds (the paper's k_max).
+    batch_size : int
+        Spheres per feasibility batch (0: all).
+    num_rasterization_spheres : int
+        No counterpart: rfta rasterizes every sphere (exact and fast); a non-zero value is
+        ignored with a warning.
+    screening_weight : float
+        PoissonRecon's screening weight; rfta's solver needs 3 times the value for the same fit
+        (docs/spsr.md), so it runs with ``3 * screening_weight``.
+    rasterization_resolution : int, optional
+        Cells per axis of the empty-space raster (default ``64 ceil(n^(1/3) / 16)``).
+    max_points_per_sphere : int
+        Tangency points per sphere at most (the paper's n_max).
+    n_local_searches : int, optional
+        No counterpart: rfta always uses the reference's default ``ceil(2 n^(1/3))``; another
+        value is ignored with a warning.
+    local_search_iters : int
+        Moves of the feasibility local search.
+    local_search_t : float
+        Step of the local search and transport (the paper's tau).
+    tol : float
+        Tolerance of the inside tests.
+    clamp_value : float
+        The SDF was clamped at this magnitude (inf: not clamped; rfta also detects a clamp).
+    force_cpu : bool
+        Accepted; this package always rasterizes on the CPU.
+    parallel : bool
+        Use every core (the mesh does not depend on it); False runs on one thread.
+    verbose : bool
+        Print each stage as it starts.
+
+    Returns
+    -------
+    V : (n, 3) float64 array
+    F : (m, 3) int64 array
+    P, N : (p, 3) float64 arrays, with ``return_point_cloud``: tangency points and normals.
+    """
+    del force_cpu  # the CPU rasterizer always runs here
+    U = _array("U", U, 2)
+    if U.shape[1] == 2:
+        raise ValueError("2D samples (U of shape (n, 2)) are not supported yet; rfta is 3D")
+    if U.shape[1] != 3:
+        raise ValueError(f"U must have shape (n, 3), not {U.shape}")
+    S = _array("S", S, 1)
+    if S.shape[0] != U.shape[0]:
+        raise ValueError(f"U has {U.shape[0]} points but S has {S.shape[0]} values")
+    if num_rasterization_spheres:
+        warnings.warn(
+            "rfta rasterizes every sphere; num_rasterization_spheres is ignored", stacklevel=2
+        )
+    if n_local_searches is not None:
+        warnings.warn(
+            "rfta uses the reference's default n_local_searches = ceil(2 n^(1/3)); "
+            "the value given is ignored",
+            stacklevel=2,
+        )
+    options = dict(
+        seed=int(rng_seed),
+        rounds=int(fine_tune_iters),
+        batch_size=int(batch_size),
+        screening=3.0 * float(screening_weight),
+        raster_resolution=rasterization_resolution,
+        max_points_per_sphere=int(max_points_per_sphere),
+        local_search_moves=int(local_search_iters),
+        transport_step=float(local_search_t),
+        tolerance=float(tol),
+        clamp=None if not np.isfinite(clamp_value) else float(clamp_value),
+        threads=None if parallel else 1,
+    )
+    V, F, P, N, _ = _run(S, U, None, "default", options, _printer(verbose, None))
+    if return_point_cloud:
+        return V, F, P, N
+    return V, F
+
+
+def screened_poisson(
+    points: Any,
+    normals: Any,
+    depth: Optional[int] = None,
+    screening: Optional[float] = None,
+    preset: str = "poissonrecon",
+):
+    """Screened Poisson surface reconstruction (Kazhdan and Hoppe 2013) of oriented points.
+
+    ``preset="poissonrecon"`` uses PoissonRecon's defaults (depth 8, screening 2),
+    ``"rfta"`` the setting the reconstruction runs. Returns ``(V, F)``.
+    """
+    P, N = _rows("points", points), _rows("normals", normals)
+    return _rfta.screened_poisson(P, N, depth=depth, screening=screening, preset=preset)
+
+
+def marching_cubes(S: Any, bounds: Bounds = None, iso: float = 0.0):
+    """Marching cubes of a grid of values over ``bounds`` (as ``reconstruct``). Returns (V, F)."""
+    S = _array("S", S, 3)
+    lo, hi = _bounds(bounds)
+    return _rfta.marching_cubes(S, lo, hi, float(iso))
+
+
+def signed_distance(points: Any, V: Any, F: Any) -> np.ndarray:
+    """Distance from each point to the mesh (V, F), negative inside by winding number."""
+    return _rfta.signed_distance(_rows("points", points), _rows("V", V), _faces(F))
+
+
+def sample_sdf(V: Any, F: Any, res: int, bounds: Bounds = None) -> np.ndarray:
+    """The exact signed distance of the mesh (V, F) on a (res + 1)^3 grid over ``bounds``
+    (default [-1, 1]^3), as an array ``S[i, j, k]`` ready for ``reconstruct``."""
+    res = int(res)
+    if res < 1:
+        raise ValueError("res must be at least 1 (the grid has res + 1 points per axis)")
+    lo, hi = _bounds(bounds)
+    dims = [res + 1] * 3
+    flat = _rfta.sample_sdf(_rows("V", V), _faces(F), dims, lo, hi)
+    return flat.reshape(dims)

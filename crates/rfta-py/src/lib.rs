@@ -1,0 +1,454 @@
+//! Python bindings of rfta: the extension module `rfta._rfta` behind the `rfta` Python package
+//! (`python/rfta/__init__.py` holds the public API, the argument checks and the conversions of
+//! numpy arrays; this module takes contiguous `float64` arrays only).
+//!
+//! Every long call runs without the GIL, so other Python threads go on; the reconstruction runs
+//! on a worker thread while the calling thread waits, checks for Ctrl-C (`KeyboardInterrupt`)
+//! and calls the progress callback, with the GIL, between waits. Errors become `ValueError` (bad
+//! input; `NoSurfaceError`, a `ValueError`, when the samples describe no surface) or
+//! `RuntimeError`, with the library's message; a panic becomes a `RuntimeError` too.
+//!
+//! Built by maturin (`pip install crates/rfta-py`); `cargo build -p rfta-py` builds the shared
+//! library without linking libpython.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, mpsc};
+use std::time::Duration;
+
+use numpy::{
+    PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use rfta::Stage;
+use rfta_geom::glam::DVec3;
+use rfta_geom::{Grid, OrientedPoints, SdfSamples, TriMesh};
+
+pyo3::create_exception!(
+    _rfta,
+    NoSurfaceError,
+    PyValueError,
+    "The samples describe no surface (every value of one sign, and their spheres leave no room)."
+);
+
+/// `(n, 3)` rows as points.
+fn points(a: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<DVec3>> {
+    let shape = a.shape();
+    if shape[1] != 3 {
+        return Err(PyValueError::new_err(format!(
+            "{what} must have shape (n, 3), not {shape:?}"
+        )));
+    }
+    let flat = a.as_slice()?;
+    Ok(flat
+        .chunks_exact(3)
+        .map(|c| DVec3::new(c[0], c[1], c[2]))
+        .collect())
+}
+
+/// `(m, 3)` integer rows as faces of a mesh with `n_vertices` vertices.
+fn faces(a: &PyReadonlyArray2<'_, i64>, n_vertices: usize) -> PyResult<Vec<[u32; 3]>> {
+    let shape = a.shape();
+    if shape[1] != 3 {
+        return Err(PyValueError::new_err(format!(
+            "F must have shape (m, 3), not {shape:?}"
+        )));
+    }
+    a.as_slice()?
+        .chunks_exact(3)
+        .map(|c| {
+            let mut f = [0u32; 3];
+            for (k, &v) in c.iter().enumerate() {
+                f[k] = u32::try_from(v)
+                    .ok()
+                    .filter(|&i| (i as usize) < n_vertices)
+                    .ok_or_else(|| {
+                        PyValueError::new_err(format!(
+                            "F holds index {v}, outside the {n_vertices} vertices"
+                        ))
+                    })?;
+            }
+            Ok(f)
+        })
+        .collect()
+}
+
+/// A mesh as numpy arrays `V (n, 3) float64`, `F (m, 3) int64`.
+fn mesh_arrays<'py>(py: Python<'py>, mesh: &TriMesh) -> PyResult<Bound<'py, PyTuple>> {
+    let v = rows(py, &mesh.vertices)?;
+    let f: Vec<i64> = mesh.faces.iter().flat_map(|f| f.map(i64::from)).collect();
+    let f = PyArray1::from_vec(py, f).reshape([mesh.faces.len(), 3])?;
+    PyTuple::new(py, [v.into_any(), f.into_any()])
+}
+
+/// Points as an `(n, 3)` float64 array.
+fn rows<'py>(py: Python<'py>, p: &[DVec3]) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let flat: Vec<f64> = p.iter().flat_map(|v| v.to_array()).collect();
+    PyArray1::from_vec(py, flat).reshape([p.len(), 3])
+}
+
+fn grid_of(dims: [usize; 3], lo: [f64; 3], hi: [f64; 3]) -> PyResult<Grid> {
+    Grid::from_bounds(dims, DVec3::from_array(lo), DVec3::from_array(hi))
+        .map_err(|e| PyValueError::new_err(format!("bounds: {e}")))
+}
+
+/// The library's error as the Python exception a caller can act on.
+fn error(e: rfta::Error) -> PyErr {
+    use rfta::Error as E;
+    match e {
+        E::NoSurface { .. } => NoSurfaceError::new_err(e.to_string()),
+        E::InvalidParams(_)
+        | E::NotADistance(_)
+        | E::TooLarge { .. }
+        | E::TooFewPoints { .. }
+        | E::ThreadPool { .. } => PyValueError::new_err(e.to_string()),
+        E::Cancelled => PyKeyboardInterrupt::new_err("cancelled"),
+        _ => PyRuntimeError::new_err(e.to_string()),
+    }
+}
+
+/// The parameters: a preset, then the overrides in `options` (names of `rfta::Params` fields).
+fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::Params> {
+    let mut p = match preset {
+        "default" => rfta::Params::default(),
+        "paper" => rfta::Params::paper_table(),
+        "fast" => rfta::Params::fast(),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "preset '{other}' is not one of 'default', 'paper', 'fast'"
+            )));
+        }
+    };
+    let Some(options) = options else {
+        return Ok(p);
+    };
+    for (key, value) in options.iter() {
+        let key: String = key.extract()?;
+        if value.is_none() {
+            continue;
+        }
+        let bad = |e: PyErr| PyValueError::new_err(format!("{key}: {e}"));
+        match key.as_str() {
+            "rounds" => p.rounds = value.extract().map_err(bad)?,
+            "max_points_per_sphere" => p.max_points_per_sphere = value.extract().map_err(bad)?,
+            "batch_size" => p.batch_size = value.extract().map_err(bad)?,
+            "screening" => p.screening = value.extract().map_err(bad)?,
+            "depth" => p.spsr_depth = Some(value.extract().map_err(bad)?),
+            "local_search_moves" => p.local_search_moves = value.extract().map_err(bad)?,
+            "transport_step" => p.transport_step = value.extract().map_err(bad)?,
+            "tolerance" => p.tolerance = value.extract().map_err(bad)?,
+            "raster_resolution" => p.raster_resolution = Some(value.extract().map_err(bad)?),
+            "clamp" => p.clamp = Some(value.extract().map_err(bad)?),
+            "check" => p.check = value.extract().map_err(bad)?,
+            "seed" => p.seed = value.extract().map_err(bad)?,
+            "threads" => p.threads = Some(value.extract().map_err(bad)?),
+            "owner_band" => {
+                let b: f64 = value.extract().map_err(bad)?;
+                p.owner_band = (b > 0.0).then_some(b);
+            }
+            "min_island" => p.min_island = value.extract().map_err(bad)?,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "unknown parameter '{other}'"
+                )));
+            }
+        }
+    }
+    Ok(p)
+}
+
+/// A stage as the progress callback sees it: `(stage, done, of)`.
+fn stage_tuple(stage: Stage) -> (String, usize, usize) {
+    match stage {
+        Stage::Initial => ("initial".into(), 0, 1),
+        Stage::FineTune { round, of } => (format!("round {round}/{of}"), round - 1, of),
+        Stage::Final => ("final".into(), 0, 1),
+        Stage::Progress { done, of } => ("progress".into(), done, of),
+        _ => ("stage".into(), 0, 1),
+    }
+}
+
+/// Runs `work` on a worker thread without the GIL, while this thread forwards its stages to
+/// `progress`, and on Ctrl-C (or an exception raised by `progress`) sets the cancel flag, waits
+/// for the worker to stop and raises.
+fn detached<T: Send>(
+    py: Python<'_>,
+    progress: Option<&Bound<'_, PyAny>>,
+    work: impl FnOnce(&mut (dyn FnMut(Stage) + Send), &AtomicBool) -> rfta::Result<T> + Send,
+) -> PyResult<T> {
+    let cancel = AtomicBool::new(false);
+    let (send, receive) = mpsc::channel::<Stage>();
+    // Waited on without the GIL, so shared with the closure that runs detached.
+    let receive = Mutex::new(receive);
+    let mut raised: Option<PyErr> = None;
+    let outcome = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| {
+            let mut forward = move |stage: Stage| {
+                let _ = send.send(stage);
+            };
+            work(&mut forward, &cancel)
+        });
+        loop {
+            let next = py.detach(|| match receive.lock() {
+                Ok(r) => r.recv_timeout(Duration::from_millis(100)),
+                Err(_) => Err(mpsc::RecvTimeoutError::Disconnected),
+            });
+            match next {
+                Ok(stage) => {
+                    if let (Some(cb), None) = (progress, &raised)
+                        && let Err(e) = cb.call1(stage_tuple(stage))
+                    {
+                        cancel.store(true, Ordering::Relaxed);
+                        raised = Some(e);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    if raised.is_none()
+                        && let Err(e) = py.check_signals()
+                    {
+                        cancel.store(true, Ordering::Relaxed);
+                        raised = Some(e);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            }
+        }
+        py.detach(|| worker.join())
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    match outcome {
+        Ok(result) => result.map_err(error),
+        Err(_) => Err(PyRuntimeError::new_err(
+            "rfta panicked (a bug: please report it with the input)",
+        )),
+    }
+}
+
+/// Reconstructs from samples: `values` (n,) at `positions` (n, 3), or on the grid `dims` over
+/// `lo`..`hi` (C order) when `positions` is `None`. Positions that are exactly the points of a
+/// grid, in any order, are treated as that grid. Returns `(V, F, P, N, report)`.
+#[pyfunction]
+#[pyo3(signature = (values, positions=None, dims=None, lo=None, hi=None, preset="default", options=None, progress=None))]
+#[expect(clippy::too_many_arguments, reason = "the Python wrapper's keywords")]
+fn reconstruct<'py>(
+    py: Python<'py>,
+    values: PyReadonlyArray1<'py, f64>,
+    positions: Option<PyReadonlyArray2<'py, f64>>,
+    dims: Option<[usize; 3]>,
+    lo: Option<[f64; 3]>,
+    hi: Option<[f64; 3]>,
+    preset: &str,
+    options: Option<&Bound<'py, PyDict>>,
+    progress: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let params = params(preset, options)?;
+    let values = values.as_slice()?.to_vec();
+    let samples = match (positions, dims, lo, hi) {
+        (Some(p), None, None, None) => {
+            let p = points(&p, "U")?;
+            if p.len() != values.len() {
+                return Err(PyValueError::new_err(format!(
+                    "U has {} points but S has {} values",
+                    p.len(),
+                    values.len()
+                )));
+            }
+            match Grid::fit(&p) {
+                Some((grid, index)) => {
+                    let mut on_grid = vec![0.0; values.len()];
+                    for (&i, &v) in index.iter().zip(&values) {
+                        on_grid[i] = v;
+                    }
+                    SdfSamples::grid(grid, on_grid)
+                }
+                None => SdfSamples::scattered(p, values),
+            }
+        }
+        (None, Some(dims), Some(lo), Some(hi)) => SdfSamples::grid(grid_of(dims, lo, hi)?, values),
+        _ => {
+            return Err(PyValueError::new_err(
+                "give positions, or dims with lo and hi",
+            ));
+        }
+    }
+    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let out = detached(py, progress, |progress, cancel| {
+        rfta::reconstruct_cancellable(&samples, &params, progress, cancel)
+    })?;
+    let (v_f, p, n) = (
+        mesh_arrays(py, &out.mesh)?,
+        rows(py, &out.points.points)?,
+        rows(py, &out.points.normals)?,
+    );
+    let report = report_dict(py, &out.report, samples.as_grid().is_some())?;
+    PyTuple::new(
+        py,
+        [
+            v_f.get_item(0)?,
+            v_f.get_item(1)?,
+            p.into_any(),
+            n.into_any(),
+            report.into_any(),
+        ],
+    )
+}
+
+/// The report as a dict (the names of `rfta::Report`'s fields).
+fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("samples", r.samples)?;
+    d.set_item("grid", grid)?;
+    d.set_item("negative", r.negative)?;
+    d.set_item("raster_resolution", r.raster_resolution)?;
+    d.set_item("spsr_depth", r.spsr_depth)?;
+    d.set_item("feasible_initial", r.feasible_initial)?;
+    d.set_item("points_per_round", r.points_per_round.clone())?;
+    d.set_item("spheres_without_point", r.spheres_without_point)?;
+    d.set_item("far_spheres", r.far_spheres)?;
+    d.set_item("islands_removed", r.islands_removed)?;
+    d.set_item("unsupported_removed", r.unsupported_removed)?;
+    d.set_item("vertices_pushed_out", r.vertices_pushed_out)?;
+    d.set_item("side_errors", r.side_errors.clone())?;
+    d.set_item("stopped_early", r.stopped_early.clone())?;
+    d.set_item("clamp", r.clamp)?;
+    d.set_item("components", r.mesh.components)?;
+    d.set_item("watertight", r.mesh.watertight)?;
+    let c = &r.consistency;
+    d.set_item("spacing", c.spacing)?;
+    d.set_item("sign_errors", c.sign_errors)?;
+    d.set_item("entered", c.entered)?;
+    d.set_item("gaps", c.gaps)?;
+    d.set_item("deepest_entry", c.deepest_entry)?;
+    d.set_item("warnings", r.warnings.clone())?;
+    let timings = PyDict::new(py);
+    for (stage, t) in &r.timings {
+        timings.set_item(stage, t.as_secs_f64())?;
+    }
+    d.set_item("timings", timings)?;
+    Ok(d)
+}
+
+/// Screened Poisson reconstruction of oriented points (PoissonRecon's defaults, or the setting
+/// the reconstruction runs with `preset="rfta"`). Returns `(V, F)`.
+#[pyfunction]
+#[pyo3(signature = (points, normals, depth=None, screening=None, preset="poissonrecon"))]
+fn screened_poisson<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    normals: PyReadonlyArray2<'py, f64>,
+    depth: Option<u32>,
+    screening: Option<f64>,
+    preset: &str,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let mut params = match preset {
+        "poissonrecon" => rfta_spsr::SpsrParams::default(),
+        "rfta" => rfta::Params::default().spsr_params(None),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "preset '{other}' is not one of 'poissonrecon', 'rfta'"
+            )));
+        }
+    };
+    if let Some(d) = depth {
+        params.depth = d;
+    }
+    if let Some(s) = screening {
+        params.screening = s;
+    }
+    let (p, n) = (
+        self::points(&points, "points")?,
+        self::points(&normals, "normals")?,
+    );
+    if p.len() != n.len() {
+        return Err(PyValueError::new_err(format!(
+            "{} points but {} normals",
+            p.len(),
+            n.len()
+        )));
+    }
+    let cloud =
+        OrientedPoints::new(p, n, None).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let out = py
+        .detach(|| rfta_spsr::reconstruct(&cloud, &params))
+        .map_err(|e| match e {
+            rfta_spsr::Error::DegenerateInput(_) | rfta_spsr::Error::InvalidParams(_) => {
+                PyValueError::new_err(e.to_string())
+            }
+            _ => PyRuntimeError::new_err(e.to_string()),
+        })?;
+    mesh_arrays(py, &out.mesh)
+}
+
+/// Marching cubes of a grid of values (C order) over `lo`..`hi`. Returns `(V, F)`.
+#[pyfunction]
+#[pyo3(signature = (values, lo, hi, iso=0.0))]
+fn marching_cubes<'py>(
+    py: Python<'py>,
+    values: PyReadonlyArray3<'py, f64>,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    iso: f64,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let s = values.shape();
+    let grid = grid_of([s[0], s[1], s[2]], lo, hi)?;
+    let v = values.as_slice()?;
+    let mesh = py.detach(|| rfta_mc::marching_cubes(&grid, v, iso));
+    mesh_arrays(py, &mesh)
+}
+
+fn mesh_index(
+    v: &PyReadonlyArray2<'_, f64>,
+    f: &PyReadonlyArray2<'_, i64>,
+) -> PyResult<rfta_mesh::MeshIndex> {
+    let vertices = points(v, "V")?;
+    let faces = faces(f, vertices.len())?;
+    let mesh = TriMesh { vertices, faces };
+    rfta_mesh::MeshIndex::new(&mesh).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// Signed distance from each point to the mesh `(V, F)`, negative inside (by winding number).
+#[pyfunction]
+fn signed_distance<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    v: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray2<'py, i64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let q = self::points(&points, "points")?;
+    let index = mesh_index(&v, &f)?;
+    let d = py.detach(|| index.signed_distances(&q));
+    Ok(PyArray1::from_vec(py, d))
+}
+
+/// The exact signed distance of the mesh `(V, F)` on the grid `dims` over `lo`..`hi`, as a flat
+/// C-order array.
+#[pyfunction]
+fn sample_sdf<'py>(
+    py: Python<'py>,
+    v: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray2<'py, i64>,
+    dims: [usize; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let grid = grid_of(dims, lo, hi)?;
+    let index = mesh_index(&v, &f)?;
+    let values = py.detach(|| index.signed_distance_grid(&grid, &|| {}));
+    Ok(PyArray1::from_vec(py, values))
+}
+
+#[pymodule]
+fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("NoSurfaceError", m.py().get_type::<NoSurfaceError>())?;
+    m.add_function(wrap_pyfunction!(reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(screened_poisson, m)?)?;
+    m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
+    m.add_function(wrap_pyfunction!(signed_distance, m)?)?;
+    m.add_function(wrap_pyfunction!(sample_sdf, m)?)?;
+    Ok(())
+}

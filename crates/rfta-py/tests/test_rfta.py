@@ -1,0 +1,243 @@
+"""The rfta Python package: the drop-in signature, agreement with the CLI, the GIL, errors.
+
+Run: pip install crates/rfta-py[test] && pytest crates/rfta-py/tests
+(RFTA_BIN names the rfta binary for the CLI comparison; `cargo xtask ci` sets it.)
+"""
+
+import inspect
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import rfta
+
+
+def grid(n, lo=-1.0, hi=1.0):
+    """The points of linspace(lo, hi, n + 1)^3 as numpy's meshgrid(indexing="ij") gives them."""
+    g = np.linspace(lo, hi, n + 1)
+    return np.stack(np.meshgrid(g, g, g, indexing="ij"), -1)
+
+
+def torus_sdf(p, R=0.5, r=0.2):
+    q = np.sqrt(p[..., 0] ** 2 + p[..., 1] ** 2) - R
+    return np.sqrt(q**2 + p[..., 2] ** 2) - r
+
+
+def read_obj(path):
+    V, F = [], []
+    with open(path) as f:
+        for line in f:
+            t = line.split()
+            if t and t[0] == "v":
+                V.append([float(x) for x in t[1:4]])
+            elif t and t[0] == "f":
+                F.append([int(x.split("/")[0]) - 1 for x in t[1:4]])
+    return np.array(V), np.array(F)
+
+
+# gpytoolbox 0.3.8's signature, argument for argument (names and defaults).
+GPYTOOLBOX = [
+    ("U", inspect.Parameter.empty),
+    ("S", inspect.Parameter.empty),
+    ("rng_seed", 3452),
+    ("return_point_cloud", False),
+    ("fine_tune_iters", 3),
+    ("batch_size", 10000),
+    ("num_rasterization_spheres", 0),
+    ("screening_weight", 10.0),
+    ("rasterization_resolution", None),
+    ("max_points_per_sphere", 3),
+    ("n_local_searches", None),
+    ("local_search_iters", 20),
+    ("local_search_t", 0.01),
+    ("tol", 1e-4),
+    ("clamp_value", np.inf),
+    ("force_cpu", False),
+    ("parallel", False),
+    ("verbose", False),
+]
+
+
+def test_the_drop_in_has_gpytoolboxs_signature():
+    params = inspect.signature(rfta.reach_for_the_arcs).parameters
+    assert [(n, p.default) for n, p in params.items()] == GPYTOOLBOX
+
+
+def test_the_drop_in_reconstructs_a_torus_from_gpytoolboxs_meshgrid():
+    # gpytoolbox's docstring builds U with meshgrid's default "xy" indexing: y slowest.
+    g = np.linspace(-1.0, 1.0, 21)
+    gx, gy, gz = np.meshgrid(g, g, g)
+    U = np.vstack((gx.flatten(), gy.flatten(), gz.flatten())).T
+    S = torus_sdf(U)
+    V, F = rfta.reach_for_the_arcs(U, S)
+    assert V.dtype == np.float64 and V.shape[1] == 3
+    assert F.dtype == np.int64 and F.shape[1] == 3 and F.max() < len(V)
+    # Vertices on the torus: on average within 2% of the grid spacing (0.1; marching cubes on
+    # the same grid: 1.0%), every one within half of it.
+    err = np.abs(torus_sdf(V))
+    assert err.mean() < 0.002 and err.max() < 0.05
+    V2, F2, P, N = rfta.reach_for_the_arcs(U, S, return_point_cloud=True)
+    assert np.array_equal(V, V2) and np.array_equal(F, F2)
+    assert P.shape == N.shape and np.allclose(np.linalg.norm(N, axis=1), 1.0)
+    # The points are recognised as a grid: the same mesh as the grid itself in the fast preset
+    # (gpytoolbox's defaults).
+    S_ij = torus_sdf(grid(20))
+    r = rfta.reconstruct(S_ij, bounds=(-1, 1), preset="fast")
+    assert r.report["grid"]
+    assert np.array_equal(r.vertices, V) and np.array_equal(r.faces, F)
+
+
+def test_same_mesh_as_the_cli(tmp_path):
+    exe = os.environ.get("RFTA_BIN")
+    if not exe:
+        pytest.skip("RFTA_BIN is not set (cargo xtask ci sets it)")
+    S = torus_sdf(grid(16))
+    np.save(tmp_path / "torus.npy", S)
+    out = tmp_path / "torus.obj"
+    subprocess.run(
+        [exe, "-q", "reconstruct", str(tmp_path / "torus.npy"), "-o", str(out),
+         "--bounds=-1,1", "--seed", "7", "--iters", "4"],
+        check=True,
+    )
+    V, F = read_obj(out)
+    r = rfta.reconstruct(S, bounds=(-1, 1), seed=7, rounds=4)
+    assert np.array_equal(r.vertices, V)
+    assert np.array_equal(r.faces, F)
+
+
+def test_float32_and_non_contiguous_input():
+    S = torus_sdf(grid(12))
+    base = rfta.reconstruct(S, rounds=2)
+    fortran = rfta.reconstruct(np.asfortranarray(S), rounds=2)
+    assert np.array_equal(base.vertices, fortran.vertices)
+    # Every other point of a finer grid: a strided view of the same samples.
+    fine = torus_sdf(grid(24))[::2, ::2, ::2]
+    assert not fine.flags["C_CONTIGUOUS"]
+    strided = rfta.reconstruct(fine, rounds=2)
+    assert np.array_equal(base.vertices, strided.vertices)
+    # float32 values: a mesh as close to the torus (spacing 1/6: within 2.5% on average, half a
+    # spacing at worst).
+    single = rfta.reconstruct(S.astype(np.float32), rounds=2)
+    err = np.abs(torus_sdf(single.vertices))
+    assert err.mean() < 0.004 and err.max() < 0.08
+
+
+def test_the_gil_is_released_while_it_works():
+    S = torus_sdf(grid(28))
+    counts = []
+    stop = threading.Event()
+
+    def count():
+        n = 0
+        while not stop.is_set():
+            n += 1
+            time.sleep(0.001)
+        counts.append(n)
+
+    t = threading.Thread(target=count)
+    t.start()
+    start = time.time()
+    rfta.reconstruct(S, threads=1)
+    took = time.time() - start
+    stop.set()
+    t.join()
+    # The counter sleeps 1 ms a step: with the GIL held by the reconstruction it could not run.
+    assert took > 0.2
+    assert counts[0] > 0.2 * took / 0.001
+
+
+def test_bad_input_is_a_value_error():
+    U = grid(6).reshape(-1, 3)
+    S = torus_sdf(U)
+    nan = S.copy()
+    nan[10] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        rfta.reach_for_the_arcs(U, nan)
+    with pytest.raises(ValueError, match="shape"):
+        rfta.reach_for_the_arcs(U[:, :2].T, S)
+    with pytest.raises(ValueError, match="values"):
+        rfta.reach_for_the_arcs(U, S[:-1])
+    with pytest.raises(ValueError, match="not supported"):
+        rfta.reach_for_the_arcs(U[:, :2], S)
+    with pytest.raises(ValueError, match="3 dimension"):
+        rfta.reconstruct(S)
+    with pytest.raises(ValueError, match="bounds"):
+        rfta.reconstruct(S.reshape(7, 7, 7), bounds=(1, -1))
+    with pytest.raises(ValueError, match="preset"):
+        rfta.reconstruct(S.reshape(7, 7, 7), preset="fastest")
+    # Not a distance: random values are refused by the check, with the library's message.
+    rng = np.random.default_rng(1)
+    with pytest.raises(ValueError, match="distance"):
+        rfta.reconstruct(rng.uniform(-1, 1, (9, 9, 9)))
+
+
+def test_no_surface_is_its_own_value_error():
+    with pytest.raises(rfta.NoSurfaceError, match="no surface"):
+        rfta.reconstruct(np.full((6, 6, 6), 3.0))
+    assert issubclass(rfta.NoSurfaceError, ValueError)
+
+
+def test_progress_is_reported_and_an_exception_in_it_stops_the_run():
+    seen = []
+    rfta.reconstruct(torus_sdf(grid(10)), rounds=3, progress=lambda s, d, o: seen.append(s))
+    assert seen[0] == "initial" and "round 3/3" in seen and seen[-1] == "final"
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_round_2(stage, done, of):
+        if stage == "round 2/10":
+            raise Stop()
+
+    with pytest.raises(Stop):
+        rfta.reconstruct(torus_sdf(grid(10)), progress=stop_at_round_2)
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT by os.kill")
+def test_ctrl_c_stops_a_long_run():
+    S = torus_sdf(grid(40))
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    start = time.time()
+    with pytest.raises(KeyboardInterrupt):
+        rfta.reconstruct(S, preset="paper", threads=1)
+    timer.cancel()
+    # The paper preset at 41^3 takes far longer; the run stops at the next round.
+    assert time.time() - start < 30
+
+
+def test_the_other_functions():
+    # Marching cubes and sampling of a sphere.
+    S = np.linalg.norm(grid(20), axis=-1) - 0.5
+    V, F = rfta.marching_cubes(S, bounds=(-1, 1))
+    assert np.abs(np.linalg.norm(V, axis=1) - 0.5).max() < 0.01
+    # The exact distance of that mesh, on a grid and at points, against the sphere's.
+    D = rfta.sample_sdf(V, F, 10)
+    assert D.shape == (11, 11, 11)
+    exact = np.linalg.norm(grid(10), axis=-1) - 0.5
+    assert np.abs(D - exact).max() < 0.01
+    q = np.array([[0.0, 0.0, 0.0], [0.9, 0.0, 0.0], [0.0, 0.6, 0.0]])
+    assert np.allclose(rfta.signed_distance(q, V, F), [-0.5, 0.4, 0.1], atol=0.01)
+    # Screened Poisson of points on the sphere with their normals.
+    rng = np.random.default_rng(3)
+    N = rng.normal(size=(4000, 3))
+    N /= np.linalg.norm(N, axis=1)[:, None]
+    V, F = rfta.screened_poisson(0.5 * N, N, depth=6)
+    assert np.abs(np.linalg.norm(V, axis=1) - 0.5).max() < 0.02
+    with pytest.raises(ValueError, match="outside"):
+        rfta.signed_distance(q, V, F + len(V))
+
+
+def test_side_by_side_with_gpytoolbox():
+    gpy = pytest.importorskip("gpytoolbox")
+    U = grid(12).reshape(-1, 3)
+    S = torus_sdf(U)
+    V, F = rfta.reach_for_the_arcs(U, S)
+    Vg, Fg = gpy.reach_for_the_arcs(U, S)
+    # Mean distance of the vertices to the true torus: rfta's is no larger.
+    assert np.abs(torus_sdf(V)).mean() <= np.abs(torus_sdf(Vg)).mean()
