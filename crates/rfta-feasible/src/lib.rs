@@ -66,6 +66,11 @@ pub struct Params {
     pub severe: f64,
     /// Halvings of the transport step before giving up (20).
     pub halvings: usize,
+    /// A sphere's own points lie on it at `owner_scale` times its radius (1), while every other
+    /// sphere constrains them at its radius: with noisy values the caller shrinks the spheres
+    /// by the noise and scales them back for their own points, so that a point counts as inside
+    /// another sphere only when it is deeper than that sphere's noise.
+    pub owner_scale: f64,
 }
 
 impl Default for Params {
@@ -79,6 +84,7 @@ impl Default for Params {
             owner_radius: f64::INFINITY,
             severe: 0.8,
             halvings: 20,
+            owner_scale: 1.0,
         }
     }
 }
@@ -87,6 +93,14 @@ impl Params {
     /// The reference's `k_search = ceil(2 n^(1/3))` for `n` samples.
     pub fn k_search_for(n: usize) -> usize {
         (2.0 * (n as f64).cbrt()).ceil().max(1.0) as usize
+    }
+
+    /// Sphere `s` as its own points see it ([`Params::owner_scale`]).
+    pub fn owner(&self, s: Sphere) -> Sphere {
+        Sphere {
+            radius: s.radius * self.owner_scale,
+            ..s
+        }
     }
 }
 
@@ -227,7 +241,7 @@ pub fn local_search(
     mut x: DVec3,
     params: &Params,
 ) -> Option<DVec3> {
-    let s = spheres[i as usize];
+    let s = params.owner(spheres[i as usize]);
     let mut buf = Vec::new();
     let mut cands: Vec<(f64, u32)> = Vec::new();
     let mut list: Vec<Sphere> = Vec::new();
@@ -279,7 +293,7 @@ fn transport_checked(
     params: &Params,
     near: &mut Vec<u32>,
 ) -> (DVec3, bool) {
-    let s = spheres[i as usize];
+    let s = params.owner(spheres[i as usize]);
     let tol = params.tol;
     if (a - q).length() < tol || s.radius < tol || (a - s.center).length() < tol {
         return (a, false);
@@ -351,7 +365,7 @@ pub fn initial_points_counted(
     let per: Vec<Vec<(DVec3, DVec3)>> = set
         .par_iter()
         .map(|&i| {
-            let s = spheres[i as usize];
+            let s = params.owner(spheres[i as usize]);
             let v = values[i as usize];
             if s.radius >= params.owner_radius || s.radius <= 0.0 {
                 return Vec::new();
@@ -438,7 +452,7 @@ pub fn fine_tune_counted(
     let per: Vec<Vec<(DVec3, DVec3)>> = (0..n as u32)
         .into_par_iter()
         .map(|i| {
-            let s = spheres[i as usize];
+            let s = params.owner(spheres[i as usize]);
             let v = values[i as usize];
             let r = s.radius;
             if r >= params.owner_radius || r <= 0.0 {

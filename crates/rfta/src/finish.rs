@@ -373,7 +373,7 @@ mod tests {
             .map(|i| grid.position(i).length() - 0.5)
             .collect();
         let samples = SdfSamples::grid(grid, values).expect("samples");
-        let unit = UnitBox::new(&samples, None);
+        let unit = UnitBox::new(&samples, None, None);
         let all: Vec<u32> = (0..unit.len() as u32).collect();
         let tree = SphereTree::with_indices(&unit.spheres, &all);
         let depth = PUSH_DEPTH * unit.spacing();
@@ -459,7 +459,7 @@ mod tests {
         cavity.flip();
         let params = Params::default();
         let judge_on = |s: &SdfSamples, m: &TriMesh| {
-            let unit = UnitBox::new(s, None);
+            let unit = UnitBox::new(s, None, None);
             let faces: Vec<usize> = (0..m.faces.len()).collect();
             let bounds = Aabb::from_points(&m.vertices);
             judge(&unit, &params, &OnceLock::new(), m, &faces, bounds)

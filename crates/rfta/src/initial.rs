@@ -30,7 +30,7 @@ pub(crate) fn initial_points(
     } else {
         rfta_raster::Backend::Cpu
     };
-    let fparams = params.feasible_params(n, unit.owner_radius(params));
+    let fparams = params.feasible_params(n, unit.owner_radius(params), unit.owner_scale());
     let values = &unit.values;
     let neg: Vec<u32> = (0..n as u32)
         .filter(|&i| values[i as usize] < 0.0)

@@ -218,7 +218,7 @@ fn run(
         check::samples(samples, params, &mut report)?;
     }
     go_on()?;
-    let unit = normalize::UnitBox::new(samples, report.clamp);
+    let unit = normalize::UnitBox::new(samples, report.clamp, report.radius_scale);
     let cloud = initial::initial_points(&unit, params, &mut report, progress)?;
     let mut rounds = rounds::Rounds::new(&unit, params, cloud);
     rounds.run(&unit, params, &mut report, progress, &go_on)?;

@@ -6,7 +6,8 @@ use rfta_geom::{SdfSamples, Sphere};
 use crate::Params;
 
 /// The samples moved into the unit box as the reference does (subtract the per-axis minimum,
-/// divide by the largest extent), as spheres of radius `|s|` capped at the clamp.
+/// divide by the largest extent), as spheres of radius `|s|` (times the noise shrink
+/// [`crate::Report::radius_scale`]) capped at the clamp.
 pub(crate) struct UnitBox {
     trans: DVec3,
     scale: f64,
@@ -14,7 +15,7 @@ pub(crate) struct UnitBox {
     pub(crate) centers: Vec<DVec3>,
     /// Signed values, scaled.
     pub(crate) values: Vec<f64>,
-    /// Spheres of radius `min(|s|, clamp)`.
+    /// Spheres of radius `min(radius_scale |s|, clamp)`.
     pub(crate) spheres: Vec<Sphere>,
     /// The clamp, scaled (`+inf` when none).
     pub(crate) clamp: f64,
@@ -22,10 +23,12 @@ pub(crate) struct UnitBox {
     pub(crate) input_spacing: f64,
     /// The samples lie on a grid (their spacing is uniform).
     grid: bool,
+    /// The noise shrink of the radii ([`crate::Report::radius_scale`]; 1: none).
+    shrink: f64,
 }
 
 impl UnitBox {
-    pub(crate) fn new(samples: &SdfSamples, clamp: Option<f64>) -> Self {
+    pub(crate) fn new(samples: &SdfSamples, clamp: Option<f64>, radius_scale: Option<f64>) -> Self {
         let positions = samples.positions();
         let lo = positions
             .iter()
@@ -38,10 +41,11 @@ impl UnitBox {
         let centers: Vec<DVec3> = positions.iter().map(|&p| (p - trans) / scale).collect();
         let values: Vec<f64> = samples.values().iter().map(|&s| s / scale).collect();
         let cap = clamp.map_or(f64::INFINITY, |c| c / scale);
+        let shrink = radius_scale.unwrap_or(1.0);
         let spheres = centers
             .iter()
             .zip(&values)
-            .map(|(&c, &s)| Sphere::new(c, s.abs().min(cap)))
+            .map(|(&c, &s)| Sphere::new(c, (shrink * s.abs()).min(cap)))
             .collect();
         Self {
             trans,
@@ -52,7 +56,14 @@ impl UnitBox {
             clamp: cap,
             input_spacing: sample_spacing(samples),
             grid: samples.as_grid().is_some(),
+            shrink,
         }
+    }
+
+    /// How much larger than its (shrunk) sphere a sample's own tangency points lie: its value
+    /// `|s|` itself, while it constrains the other spheres' points at the shrunk radius.
+    pub(crate) fn owner_scale(&self) -> f64 {
+        1.0 / self.shrink
     }
 
     /// Number of samples.

@@ -166,8 +166,15 @@ impl Params {
     }
 
     /// The tangency-point settings for `n` samples, where spheres of radius `owner_radius` and
-    /// larger own no point (unit box; clamped or beyond [`Params::owner_band`]).
-    pub fn feasible_params(&self, n: usize, owner_radius: f64) -> rfta_feasible::Params {
+    /// larger own no point (unit box; clamped or beyond [`Params::owner_band`]) and a sphere's own
+    /// points lie at `owner_scale` times its radius (1; above 1 for spheres shrunk by noise,
+    /// [`crate::Report::radius_scale`]).
+    pub fn feasible_params(
+        &self,
+        n: usize,
+        owner_radius: f64,
+        owner_scale: f64,
+    ) -> rfta_feasible::Params {
         rfta_feasible::Params {
             tol: self.tolerance,
             local_search_iters: self.local_search_moves,
@@ -175,6 +182,7 @@ impl Params {
             tau: self.transport_step,
             n_max: self.max_points_per_sphere,
             owner_radius,
+            owner_scale,
             ..rfta_feasible::Params::default()
         }
     }

@@ -107,6 +107,10 @@ pub struct Report {
     pub inconsistent_samples: usize,
     /// The clamp used: [`crate::Params::clamp`], or the one [`crate::Params::check`] detected.
     pub clamp: Option<f64>,
+    /// The factor below 1 every sphere's radius `|s|` was shrunk by, when [`crate::Params::check`]
+    /// measured noise (values overlapping the other sign's by more than
+    /// [`crate::check::NOISE_FLOOR`]); `None`: radii are `|s|`.
+    pub radius_scale: Option<f64>,
     /// What the output mesh is like (checked before it is returned).
     pub mesh: MeshCheck,
     /// How the output mesh agrees with every sample: sign errors, entered spheres, gaps

@@ -30,7 +30,11 @@ impl Rounds {
         Self {
             cloud,
             spsr: params.round_spsr_params(Some(unit.spacing())),
-            feasible: params.feasible_params(unit.len(), unit.owner_radius(params)),
+            feasible: params.feasible_params(
+                unit.len(),
+                unit.owner_radius(params),
+                unit.owner_scale(),
+            ),
             all: None,
         }
     }

@@ -485,3 +485,54 @@ fn a_cancel_flag_stops_the_reconstruction_between_rounds() {
     let never = AtomicBool::new(false);
     assert!(rfta::reconstruct_cancellable(&samples, &params, &mut |_| {}, &never).is_ok());
 }
+
+/// Values with 1% relative noise (seeded, uniform in [-1%, 1%] of each value): the check measures
+/// the noise, and nearly every sphere near the surface keeps a tangency point (without the noise
+/// margin, most lost theirs to inflated neighbours); the mesh stays on the torus. An exact grid
+/// is left as it is.
+#[test]
+fn noisy_values_keep_their_tangency_points() {
+    let torus = Analytic::Torus {
+        major: 0.5,
+        minor: 0.25,
+    };
+    let exact = grid_samples(torus, 20);
+    let clean = reconstruct(&exact, &Params::fast()).expect("clean");
+    assert_eq!(clean.report.radius_scale, None);
+
+    let mut rng = rfta::geom::rng::Rng::new(11);
+    let grid = *exact.as_grid().expect("grid");
+    let noisy: Vec<f64> = exact
+        .values()
+        .iter()
+        .map(|&s| s * (1.0 + 0.01 * (2.0 * rng.next_f64() - 1.0)))
+        .collect();
+    let samples = SdfSamples::grid(grid, noisy).expect("samples");
+    let out = reconstruct(&samples, &Params::fast()).expect("noisy");
+    let scale = out.report.radius_scale.expect("noise measured");
+    // At most 1% inflation, twice over: the shrink is between 0.98 and 1.
+    assert!((0.975..1.0).contains(&scale), "{scale}");
+    let owners = exact.len() - out.report.far_spheres;
+    assert!(
+        out.report.spheres_without_point * 10 <= owners,
+        "{} of {owners} spheres without a point",
+        out.report.spheres_without_point
+    );
+    // Unchecked, the same values lose points to their inflated neighbours.
+    let unchecked = Params {
+        check: false,
+        ..Params::fast()
+    };
+    let blind = reconstruct(&samples, &unchecked).expect("unchecked");
+    assert!(
+        blind.report.spheres_without_point * 4 > owners,
+        "{} of {owners}",
+        blind.report.spheres_without_point
+    );
+    // Vertices within a tenth of the spacing (0.1) of the torus on average, as the clean grid's.
+    let err = |m: &rfta::geom::TriMesh| {
+        m.vertices.iter().map(|&v| torus.sdf(v).abs()).sum::<f64>() / m.vertices.len() as f64
+    };
+    assert!(err(&out.mesh) < 0.01, "{}", err(&out.mesh));
+    assert!(err(&clean.mesh) < 0.01, "{}", err(&clean.mesh));
+}
