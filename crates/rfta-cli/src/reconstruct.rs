@@ -347,6 +347,7 @@ fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result
         "components": r.mesh.components,
         "watertight": r.mesh.watertight,
         "spheres_without_point": r.spheres_without_point,
+        "radius_scale": r.radius_scale,
         "spacing": c.spacing,
         "sign_errors": c.sign_errors,
         "entered": c.entered,

@@ -315,6 +315,7 @@ fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<B
     d.set_item("side_errors", r.side_errors.clone())?;
     d.set_item("stopped_early", r.stopped_early.clone())?;
     d.set_item("clamp", r.clamp)?;
+    d.set_item("radius_scale", r.radius_scale)?;
     d.set_item("components", r.mesh.components)?;
     d.set_item("watertight", r.mesh.watertight)?;
     let c = &r.consistency;

@@ -56,7 +56,16 @@ pub struct Inspection {
     /// The largest separation ratio short of [`SEVERE_RATIO`] (1 when no pair exceeds 1): noise
     /// that inflates values by a fraction `e` shows as a ratio up to `1 + e`.
     pub overlap: f64,
+    /// On a grid, the largest `(|s_i - s_j| - d) / (|s_i| + |s_j|)` over neighbours `i`, `j` along
+    /// an axis (`d` apart), below [`MAX_NOISE`] (0 when none is positive): a distance changes by at
+    /// most `d` over `d`, so relative noise of `e` shows as up to `e` where the gradient follows
+    /// the axis, far more often than across the surface.
+    pub lipschitz_excess: f64,
 }
+
+/// Excess over the 1-Lipschitz bound (or the separation bound) beyond this fraction of the values
+/// is not counted as noise (the separation test judges such fields).
+pub const MAX_NOISE: f64 = 0.25;
 
 impl Inspection {
     /// The fraction of checked samples that are inconsistent.
@@ -124,7 +133,41 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
             });
     }
     out.clamp = detect_clamp(samples);
+    out.lipschitz_excess = lipschitz_excess(samples);
     out
+}
+
+/// [`Inspection::lipschitz_excess`] (0 for scattered samples).
+fn lipschitz_excess(samples: &SdfSamples) -> f64 {
+    let Some(g) = samples.as_grid() else {
+        return 0.0;
+    };
+    let values = samples.values();
+    let dims = g.dims();
+    let h = g.spacing();
+    (0..values.len())
+        .into_par_iter()
+        .map(|i| {
+            let ijk = g.ijk(i);
+            let mut worst: f64 = 0.0;
+            for a in 0..3 {
+                if ijk[a] + 1 >= dims[a] {
+                    continue;
+                }
+                let mut n = ijk;
+                n[a] += 1;
+                let (si, sj) = (values[i], values[g.index(n[0], n[1], n[2])]);
+                let sum = si.abs() + sj.abs();
+                if sum > 0.0 {
+                    let e = ((si - sj).abs() - h[a]) / sum;
+                    if e < MAX_NOISE {
+                        worst = worst.max(e);
+                    }
+                }
+            }
+            worst
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// Plateau samples at the extreme magnitude of each sign (grids: all six neighbours equal;
@@ -207,24 +250,27 @@ pub(crate) fn describe(samples: &SdfSamples, i: usize) -> String {
     )
 }
 
-/// Separation ratios up to this are rounding, not noise: the spheres keep their radii.
-pub const NOISE_FLOOR: f64 = 1.001;
+/// Noise up to this fraction of the values is rounding: the spheres keep their radii.
+pub const NOISE_FLOOR: f64 = 0.001;
 
 /// Runs [`inspect`] and applies [`Params::check`]'s policy. Values that overlap the other sign's
-/// by a ratio `q` between [`NOISE_FLOOR`] and [`SEVERE_RATIO`] are taken as noise of up to
-/// `q - 1` of the value: a sample's own tangency points stay on its sphere of radius `|s|`, but as
-/// a constraint on the others' points its sphere is shrunk by `1 / q^2`
+/// by a ratio `q` (short of [`SEVERE_RATIO`]), or that change faster than a
+/// distance by a fraction `e` of their magnitude ([`Inspection::lipschitz_excess`]), are taken as
+/// noise of up to `n = max(q - 1, e)` of the value, above [`NOISE_FLOOR`]: a sample's own tangency points stay on its
+/// sphere of radius `|s|`, but as a constraint on the others' points its sphere is shrunk by
+/// `1 / (1 + n)^2`
 /// ([`Report::radius_scale`]), the most an inflated neighbour can exceed a deflated sphere. With
 /// 1% noise on a 21^3 grid, without it, most spheres near the surface lost every point to
 /// neighbours inflated by the noise.
 pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report) -> Result<()> {
     let found = inspect(samples);
     report.inconsistent_samples = found.inconsistent;
-    if found.overlap > NOISE_FLOOR {
-        report.radius_scale = Some(1.0 / (found.overlap * found.overlap));
+    let noise = (found.overlap - 1.0).max(found.lipschitz_excess);
+    if noise > NOISE_FLOOR {
+        report.radius_scale = Some((1.0 + noise).powi(-2));
         report.warnings.push(format!(
-            "the values overlap the other sign's by up to {:.2}% (noise?): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
-            100.0 * (found.overlap - 1.0)
+            "the values look noisy, by up to {:.2}% of their magnitude (they change faster than a distance can, or overlap the other sign's): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
+            100.0 * noise
         ));
     }
     if params.clamp.is_none()

@@ -108,8 +108,8 @@ pub struct Report {
     /// The clamp used: [`crate::Params::clamp`], or the one [`crate::Params::check`] detected.
     pub clamp: Option<f64>,
     /// The factor below 1 every sphere's radius `|s|` was shrunk by, when [`crate::Params::check`]
-    /// measured noise (values overlapping the other sign's by more than
-    /// [`crate::check::NOISE_FLOOR`]); `None`: radii are `|s|`.
+    /// measured noise above [`crate::check::NOISE_FLOOR`] (see [`crate::check`]); `None`: radii
+    /// are `|s|`.
     pub radius_scale: Option<f64>,
     /// What the output mesh is like (checked before it is returned).
     pub mesh: MeshCheck,
