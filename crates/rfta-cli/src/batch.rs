@@ -19,22 +19,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 
 use crate::reconstruct::{Preset, Tuning};
-use crate::ui::{Ui, parse_bounds};
+use crate::ui::{Exit, Ui, parse_bounds};
 
-/// Exit status of a batch in which some rows failed or timed out (every row was tried).
-pub(crate) const SOME_FAILED: u8 = 4;
-
-/// The batch ended with rows that failed or timed out; `main` exits with [`SOME_FAILED`].
-#[derive(Debug)]
-pub(crate) struct SomeFailed(pub(crate) String);
-
-impl std::fmt::Display for SomeFailed {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for SomeFailed {}
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct Args {
@@ -385,7 +371,7 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
         .filter_map(|s| counts.get(s))
         .sum();
     if failed > 0 {
-        return Err(SomeFailed(summary).into());
+        return Err(Exit::some_failed(summary).into());
     }
     ui.say(summary);
     Ok(())
@@ -861,7 +847,7 @@ fn merge(paths: &[PathBuf], out: Option<&Path>) -> Result<()> {
         out.display()
     ))?;
     if rows.iter().any(|r| r.status.is_failure()) {
-        return Err(SomeFailed(format!(
+        return Err(Exit::some_failed(format!(
             "{} row(s) failed or timed out",
             rows.iter().filter(|r| r.status.is_failure()).count()
         ))

@@ -100,13 +100,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) if e.is::<batch::SomeFailed>() => {
-            ui::note(&format!("error: {e}"));
-            ExitCode::from(batch::SOME_FAILED)
-        }
-        Err(e) if e.is::<reconstruct::NoSurface>() => {
-            ui::note(&format!("no surface: {e}"));
-            ExitCode::from(3)
+        Err(e) if e.is::<ui::Exit>() => {
+            ui::note(&e.to_string());
+            e.downcast_ref::<ui::Exit>()
+                .map_or(ExitCode::from(1), |x| ExitCode::from(x.code))
         }
         // The reader of our output went away (`rfta info x | head`): nothing left to say.
         Err(e)

@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use rfta::geom::{Grid, SdfSamples, TriMesh, glam::DVec3};
 use rfta::{Params, Stage};
 
-use crate::ui::{Ui, parse_bounds};
+use crate::ui::{Exit, Ui, parse_bounds};
 
 /// Parameter presets.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -64,17 +64,6 @@ pub(crate) struct Args {
     pub(crate) tuning: Tuning,
 }
 
-/// The input describes no surface: an empty mesh was written. `main` exits with status 3.
-#[derive(Debug)]
-pub(crate) struct NoSurface(pub(crate) String);
-
-impl std::fmt::Display for NoSurface {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for NoSurface {}
 
 /// Options shared by `reconstruct` and `demo`.
 #[derive(Debug, Clone, clap::Args)]
@@ -364,10 +353,10 @@ fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result
 }
 
 /// The input describes no surface: an empty mesh is written, and the reason returned as
-/// [`NoSurface`] (exit status 3).
+/// [`Exit::no_surface`] (exit status 3).
 fn no_surface(args: &Args, why: &dyn std::fmt::Display, ui: &Ui) -> Result<()> {
     write(&args.output, &TriMesh::default(), ui)?;
-    Err(NoSurface(format!(
+    Err(Exit::no_surface(format!(
         "{}: {why}; wrote an empty mesh to {}",
         args.input.display(),
         args.output.display()

@@ -52,6 +52,42 @@ impl Ui {
     }
 }
 
+/// An outcome that ends the tool with its own exit status and a line of its own, rather than
+/// status 1 and "error: ...".
+#[derive(Debug)]
+pub(crate) struct Exit {
+    /// The exit status.
+    pub(crate) code: u8,
+    /// The line printed, whole.
+    pub(crate) line: String,
+}
+
+impl Exit {
+    /// The input describes no surface (an empty mesh was written): status 3.
+    pub(crate) fn no_surface(why: String) -> Self {
+        Self {
+            code: 3,
+            line: format!("no surface: {why}"),
+        }
+    }
+
+    /// A batch tried every row and some failed or timed out: status 4.
+    pub(crate) fn some_failed(summary: String) -> Self {
+        Self {
+            code: 4,
+            line: format!("error: {summary}"),
+        }
+    }
+}
+
+impl std::fmt::Display for Exit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.line)
+    }
+}
+
+impl std::error::Error for Exit {}
+
 /// Parses `xmin,ymin,zmin,xmax,ymax,zmax` (or `lo,hi` for a cube).
 pub(crate) fn parse_bounds(s: &str) -> Result<GridBounds, String> {
     let v: Result<Vec<f64>, _> = s.split(',').map(|t| t.trim().parse::<f64>()).collect();

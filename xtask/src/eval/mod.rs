@@ -5,7 +5,10 @@
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
 //!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
 //!                  [--out DIR]
+//! cargo xtask eval --scenario noise [--noise 0.005,0.01,0.02,0.05] [--inputs DIR] [--res ..]
 //! ```
+//!
+//! `--scenario noise` runs the paper's Figure 23 instead of Table 2 ([`scenario`]).
 //!
 //! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
 //! depth matched to the sample spacing, and `--owner-band K` gives points to the spheres within
@@ -19,6 +22,7 @@
 
 mod render;
 mod report;
+mod scenario;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -76,7 +80,14 @@ struct Args {
     tuning: Tuning,
     quick: bool,
     out: Option<PathBuf>,
+    /// `--scenario NAME`: one of [`SCENARIOS`] instead of Table 2.
+    scenario: Option<String>,
+    /// `--noise LEVELS`: the noise scenario's levels (fractions of the values).
+    noise: Vec<f64>,
 }
+
+/// The scenarios `--scenario` runs (see [`scenario`]).
+const SCENARIOS: [&str; 1] = ["noise"];
 
 const METHODS: [&str; 4] = ["mc", "rfta", "rfta-default", "rfta-paper"];
 
@@ -90,6 +101,8 @@ fn parse(args: &[String]) -> Result<Args> {
         tuning: Tuning::default(),
         quick: false,
         out: None,
+        scenario: None,
+        noise: scenario::NOISE_LEVELS.to_vec(),
     };
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -129,6 +142,26 @@ fn parse(args: &[String]) -> Result<Args> {
                 )
             }
             "--quick" => a.quick = true,
+            "--scenario" => {
+                let name = value()?.trim().to_string();
+                if !SCENARIOS.contains(&name.as_str()) {
+                    bail!(
+                        "unknown scenario '{name}' (known: {})",
+                        SCENARIOS.join(", ")
+                    );
+                }
+                a.scenario = Some(name);
+            }
+            "--noise" => {
+                a.noise = value()?
+                    .split(',')
+                    .map(|t| t.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .context("--noise takes fractions like 0.005,0.01")?;
+                if a.noise.iter().any(|p| !(0.0..1.0).contains(p)) {
+                    bail!("--noise levels are fractions of the values, in [0, 1)");
+                }
+            }
             "--out" => a.out = Some(PathBuf::from(value()?)),
             other => bail!("unknown eval option '{other}'"),
         }
@@ -159,12 +192,17 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         _ => unreachable!("one of them is set above"),
     };
     if a.quick {
-        // One small shape, two resolutions, fewer samples: the CI smoke run.
+        // One small shape, two resolutions, fewer samples: the CI smoke run (a scenario: one
+        // resolution, two levels).
         unreadable.clear();
         shapes.sort_by_key(|s| s.gt.n_faces());
         shapes.truncate(1);
         a.res = vec![10, 20];
         a.samples = a.samples.min(100_000);
+        if a.scenario.is_some() {
+            a.res = vec![20];
+            a.noise = vec![0.01, 0.02];
+        }
     }
     if shapes.is_empty() {
         bail!("no shapes found");
@@ -179,6 +217,14 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         .clone()
         .unwrap_or_else(|| root.join("target/eval").join(&run_id));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    if a.scenario.as_deref() == Some("noise") {
+        for (name, why) in &unreadable {
+            eprintln!("warning: skipping {name}: {why}");
+        }
+        scenario::noise(&shapes, &a.res, &a.noise, a.samples, &out)?;
+        println!("wrote {}", out.display());
+        return Ok(());
+    }
 
     let jobs = shapes.len() * a.res.len() * a.methods.len();
     let bar = indicatif::ProgressBar::new(jobs as u64);

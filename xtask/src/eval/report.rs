@@ -381,7 +381,6 @@ pub(crate) fn write_svg(
     res: &[usize],
     methods: &[String],
 ) -> Result<()> {
-    let (w, h, left, right, top, bottom) = (640.0, 400.0, 70.0, 170.0, 30.0, 50.0);
     // (label, dashed, points)
     type Series = (String, bool, Vec<(usize, f64)>);
     let mut series: Vec<Series> = Vec::new();
@@ -418,6 +417,35 @@ pub(crate) fn write_svg(
             series.push((label, true, theirs));
         }
     }
+    let series: Vec<Line> = series
+        .into_iter()
+        .map(|(l, d, pts)| (l, d, pts.into_iter().map(|(n, v)| (n as f64, v)).collect()))
+        .collect();
+    let ticks: Vec<(f64, String)> = res.iter().map(|&n| (n as f64, n.to_string())).collect();
+    line_chart(
+        path,
+        "Mean Chamfer vs N (log scale)",
+        "N (grid cells per axis)",
+        &ticks,
+        &series,
+        2,
+    )
+}
+
+/// One line of a chart: label, dashed, `(x, y)` points.
+pub(crate) type Line = (String, bool, Vec<(f64, f64)>);
+
+/// A line chart on a log y axis, written as SVG: `series` are `(label, dashed, (x, y) points)`,
+/// `ticks` the x positions to label, `per_color` consecutive series that share a colour.
+pub(crate) fn line_chart(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    ticks: &[(f64, String)],
+    series: &[Line],
+    per_color: usize,
+) -> Result<()> {
+    let (w, h, left, right, top, bottom) = (640.0, 400.0, 70.0, 170.0, 30.0, 50.0);
     let all: Vec<f64> = series
         .iter()
         .flat_map(|s| s.2.iter().map(|p| p.1))
@@ -433,10 +461,11 @@ pub(crate) fn write_svg(
     } else {
         (-3.0, 0.0)
     };
-    let (nlo, nhi) = (
-        *res.iter().min().unwrap_or(&0) as f64,
-        *res.iter().max().unwrap_or(&1) as f64,
-    );
+    let (nlo, nhi) = ticks
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(t.0), b.max(t.0))
+        });
     let x = |n: f64| {
         left + (w - left - right)
             * if nhi > nlo {
@@ -454,7 +483,7 @@ pub(crate) fn write_svg(
     );
     writeln!(
         s,
-        "<text x=\"{}\" y=\"18\" text-anchor=\"middle\">Mean Chamfer vs N (log scale)</text>",
+        "<text x=\"{}\" y=\"18\" text-anchor=\"middle\">{title}</text>",
         (left + w - right) / 2.0
     )?;
     for e in (lo as i64)..=(hi as i64) {
@@ -467,22 +496,22 @@ pub(crate) fn write_svg(
             yy + 4.0
         )?;
     }
-    for &n in res {
+    for (t, label) in ticks {
         writeln!(
             s,
-            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{n}</text>",
-            x(n as f64),
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{label}</text>",
+            x(*t),
             h - bottom + 18.0
         )?;
     }
     writeln!(
         s,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">N (grid cells per axis)</text>",
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{x_label}</text>",
         (left + w - right) / 2.0,
         h - 10.0
     )?;
     for (i, (label, dashed, pts)) in series.iter().enumerate() {
-        let color = colors[(i / 2) % colors.len()];
+        let color = colors[(i / per_color.max(1)) % colors.len()];
         let dash = if *dashed {
             " stroke-dasharray=\"6 4\""
         } else {
@@ -490,7 +519,7 @@ pub(crate) fn write_svg(
         };
         let path: Vec<String> = pts
             .iter()
-            .map(|(n, v)| format!("{:.1},{:.1}", x(*n as f64), y(*v)))
+            .map(|(n, v)| format!("{:.1},{:.1}", x(*n), y(*v)))
             .collect();
         if !path.is_empty() {
             writeln!(
