@@ -1,7 +1,7 @@
 //! Project automation, run as `cargo xtask <command>`:
 //!
 //! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, the Python package's tests,
-//!   shaders, tidy, a quick eval and a quick noise scenario.
+//!   shaders, tidy, a quick eval and quick scenarios.
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `tidy`: repository rules (see [`tidy`]).
 //! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
@@ -29,7 +29,7 @@ cargo xtask <command>
 
 commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --scenario noise --quick
+            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --scenario noise,clamp --quick
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
@@ -37,8 +37,9 @@ commands:
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
             chamfer.svg, contact_sheet.png); --depth and --owner-band override the rfta methods'
             Poisson depth and owner band (0: every sphere owns points)
-            --scenario noise [--noise 0.005,0.01,0.02,0.05]: the paper's Figure 23, relative noise
-            on the grids, rfta-default against marching cubes on the noisy and the clean grid
+            --scenario noise,clamp [--levels L,..]: the paper's Figures 23 (relative noise, levels
+            0.005,0.01,0.02,0.05) and 24 (clamps at 4,2,1 spacings, given and detected), rfta against
+            marching cubes on the changed and the clean grid, into <out>/<scenario>/
   bench     spsr [--quick] [--points N] [--depths 8,10] [--out DIR]: our sPSR and PoissonRecon
             side by side (PoissonRecon needs `cargo bench-spsr`, i.e. --features poissonrecon)
   bench     e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny] [--out DIR]:
@@ -178,15 +179,15 @@ fn ci(root: &Path) -> Result<()> {
             root.join("target/eval/ci-quick").display().to_string(),
         ],
     )?;
-    println!("==> eval --scenario noise --quick");
+    println!("==> eval --scenario noise,clamp --quick");
     eval::run(
         root,
         &[
             "--scenario".to_string(),
-            "noise".to_string(),
+            "noise,clamp".to_string(),
             "--quick".to_string(),
             "--out".to_string(),
-            root.join("target/eval/ci-noise").display().to_string(),
+            root.join("target/eval/ci-scenarios").display().to_string(),
         ],
     )?;
     println!("==> ci passed");

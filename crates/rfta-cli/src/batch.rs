@@ -21,7 +21,6 @@ use anyhow::{Context, Result, bail};
 use crate::reconstruct::{Preset, Tuning};
 use crate::ui::{Exit, Ui, parse_bounds};
 
-
 #[derive(Debug, clap::Args)]
 pub(crate) struct Args {
     /// The manifest: CSV with a header and columns `input,output`, optionally `bounds` (6 numbers,

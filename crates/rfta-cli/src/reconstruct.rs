@@ -64,7 +64,6 @@ pub(crate) struct Args {
     pub(crate) tuning: Tuning,
 }
 
-
 /// Options shared by `reconstruct` and `demo`.
 #[derive(Debug, Clone, clap::Args)]
 pub(crate) struct Tuning {

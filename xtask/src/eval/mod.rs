@@ -5,10 +5,11 @@
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
 //!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
 //!                  [--out DIR]
-//! cargo xtask eval --scenario noise [--noise 0.005,0.01,0.02,0.05] [--inputs DIR] [--res ..]
+//! cargo xtask eval --scenario noise,clamp [--levels L,..] [--inputs DIR] [--res ..] [--quick]
 //! ```
 //!
-//! `--scenario noise` runs the paper's Figure 23 instead of Table 2 ([`scenario`]).
+//! `--scenario` runs the paper's Figures 23 (noise) and 24 (clamp) instead of Table 2, each into
+//! `<out>/<scenario>/` ([`scenario`]).
 //!
 //! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
 //! depth matched to the sample spacing, and `--owner-band K` gives points to the spheres within
@@ -80,14 +81,11 @@ struct Args {
     tuning: Tuning,
     quick: bool,
     out: Option<PathBuf>,
-    /// `--scenario NAME`: one of [`SCENARIOS`] instead of Table 2.
-    scenario: Option<String>,
-    /// `--noise LEVELS`: the noise scenario's levels (fractions of the values).
-    noise: Vec<f64>,
+    /// `--scenario NAME[,NAME]`: scenarios instead of Table 2 ([`scenario`]).
+    scenarios: Vec<scenario::Scenario>,
+    /// `--levels L[,L]`: the scenarios' levels instead of each one's own.
+    levels: Option<Vec<f64>>,
 }
-
-/// The scenarios `--scenario` runs (see [`scenario`]).
-const SCENARIOS: [&str; 1] = ["noise"];
 
 const METHODS: [&str; 4] = ["mc", "rfta", "rfta-default", "rfta-paper"];
 
@@ -101,8 +99,8 @@ fn parse(args: &[String]) -> Result<Args> {
         tuning: Tuning::default(),
         quick: false,
         out: None,
-        scenario: None,
-        noise: scenario::NOISE_LEVELS.to_vec(),
+        scenarios: Vec::new(),
+        levels: None,
     };
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -143,24 +141,28 @@ fn parse(args: &[String]) -> Result<Args> {
             }
             "--quick" => a.quick = true,
             "--scenario" => {
-                let name = value()?.trim().to_string();
-                if !SCENARIOS.contains(&name.as_str()) {
-                    bail!(
-                        "unknown scenario '{name}' (known: {})",
-                        SCENARIOS.join(", ")
-                    );
+                for name in value()?.split(',').map(str::trim) {
+                    let Some(sc) = scenario::Scenario::ALL
+                        .into_iter()
+                        .find(|s| s.name() == name)
+                    else {
+                        let known: Vec<&str> =
+                            scenario::Scenario::ALL.iter().map(|s| s.name()).collect();
+                        bail!("unknown scenario '{name}' (known: {})", known.join(", "));
+                    };
+                    a.scenarios.push(sc);
                 }
-                a.scenario = Some(name);
             }
-            "--noise" => {
-                a.noise = value()?
+            "--levels" => {
+                let levels: Vec<f64> = value()?
                     .split(',')
                     .map(|t| t.trim().parse::<f64>())
                     .collect::<Result<_, _>>()
-                    .context("--noise takes fractions like 0.005,0.01")?;
-                if a.noise.iter().any(|p| !(0.0..1.0).contains(p)) {
-                    bail!("--noise levels are fractions of the values, in [0, 1)");
+                    .context("--levels takes numbers like 0.005,0.01 (noise) or 4,2,1 (clamp)")?;
+                if levels.iter().any(|p| !p.is_finite() || *p < 0.0) {
+                    bail!("--levels must be non-negative numbers");
                 }
+                a.levels = Some(levels);
             }
             "--out" => a.out = Some(PathBuf::from(value()?)),
             other => bail!("unknown eval option '{other}'"),
@@ -199,9 +201,8 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         shapes.truncate(1);
         a.res = vec![10, 20];
         a.samples = a.samples.min(100_000);
-        if a.scenario.is_some() {
+        if !a.scenarios.is_empty() {
             a.res = vec![20];
-            a.noise = vec![0.01, 0.02];
         }
     }
     if shapes.is_empty() {
@@ -217,12 +218,22 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         .clone()
         .unwrap_or_else(|| root.join("target/eval").join(&run_id));
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-    if a.scenario.as_deref() == Some("noise") {
+    if !a.scenarios.is_empty() {
         for (name, why) in &unreadable {
             eprintln!("warning: skipping {name}: {why}");
         }
-        scenario::noise(&shapes, &a.res, &a.noise, a.samples, &out)?;
-        println!("wrote {}", out.display());
+        for &sc in &a.scenarios {
+            let levels = match (&a.levels, a.quick) {
+                (Some(l), _) => l.clone(),
+                (None, true) => sc.quick_levels(),
+                (None, false) => sc.levels(),
+            };
+            let dir = out.join(sc.name());
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            scenario::run(sc, &shapes, &a.res, &levels, a.samples, &dir)?;
+            println!("wrote {}", dir.display());
+        }
         return Ok(());
     }
 

@@ -1,10 +1,16 @@
-//! `cargo xtask eval --scenario noise`: the paper's Figure 23, noisy SDF values.
+//! `cargo xtask eval --scenario NAME`: the paper's other inputs, measured on the dev shapes.
 //!
-//! Each grid's values get relative noise `s (1 + p u)`, `u` uniform in [-1, 1] (seeded per shape,
-//! N and level), for each level `p`; rfta's default preset and marching cubes run on the noisy
-//! grid, marching cubes also on the clean one. Per row: Chamfer against the ground truth, CPU
-//! time, the spheres left without a tangency point, the noise the check measured (or that it
-//! refused the grid). Written beside the usual layout: `results.csv`, `report.md`, `chamfer.svg`.
+//! - `noise` (Figure 23): each grid's values get relative noise `s (1 + p u)`, `u` uniform in
+//!   [-1, 1] (seeded per shape, N and level), for each level `p`; rfta's default preset runs on the
+//!   noisy grid.
+//! - `clamp` (Figure 24): each grid's values are clamped at `k h` (`h` the grid spacing), for each
+//!   `k`; rfta's default preset runs with the clamp given (`--clamp`) and without it (detected by
+//!   the check).
+//!
+//! Marching cubes runs on the changed grid and on the clean one. Per row: Chamfer against the
+//! ground truth, CPU time, the spheres left without a tangency point, what the check measured
+//! (the noise, or the clamp it detected) or that it refused the grid. Written in the usual
+//! layout: `results.csv`, `report.md`, `chamfer.svg`.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -17,29 +23,128 @@ use rfta_mesh::MeshIndex;
 use super::Shape;
 use super::report::{Line, line_chart};
 
-/// The noise levels of the paper's Figure 23.
+/// The noise levels of the paper's Figure 23 (fractions of the values).
 pub(crate) const NOISE_LEVELS: [f64; 4] = [0.005, 0.01, 0.02, 0.05];
 
-/// One run of the noise scenario.
-struct NoiseRow {
+/// The clamps of the paper's Figure 24 (grid spacings).
+pub(crate) const CLAMP_LEVELS: [f64; 3] = [4.0, 2.0, 1.0];
+
+/// A scenario: what it does to a grid and which rfta runs it compares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Scenario {
+    Noise,
+    Clamp,
+}
+
+impl Scenario {
+    pub(crate) const ALL: [Scenario; 2] = [Scenario::Noise, Scenario::Clamp];
+
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Scenario::Noise => "noise",
+            Scenario::Clamp => "clamp",
+        }
+    }
+
+    /// The default levels (see [`NOISE_LEVELS`], [`CLAMP_LEVELS`]).
+    pub(crate) fn levels(self) -> Vec<f64> {
+        match self {
+            Scenario::Noise => NOISE_LEVELS.to_vec(),
+            Scenario::Clamp => CLAMP_LEVELS.to_vec(),
+        }
+    }
+
+    /// The levels of the CI's quick run.
+    pub(crate) fn quick_levels(self) -> Vec<f64> {
+        match self {
+            Scenario::Noise => vec![0.01, 0.02],
+            Scenario::Clamp => vec![2.0],
+        }
+    }
+
+    /// The level a clean grid has (added to every run as the baseline), if the scenario has one.
+    fn clean_level(self) -> Option<f64> {
+        match self {
+            Scenario::Noise => Some(0.0),
+            Scenario::Clamp => None,
+        }
+    }
+
+    fn level_label(self, level: f64) -> String {
+        match self {
+            Scenario::Noise => format!("{}%", 100.0 * level),
+            Scenario::Clamp => format!("{level} h"),
+        }
+    }
+
+    fn axis_label(self) -> &'static str {
+        match self {
+            Scenario::Noise => "noise (% of the value)",
+            Scenario::Clamp => "clamp (grid spacings)",
+        }
+    }
+
+    fn title(self) -> &'static str {
+        match self {
+            Scenario::Noise => "noise (the paper's Figure 23)",
+            Scenario::Clamp => "clamp (the paper's Figure 24)",
+        }
+    }
+
+    fn explanation(self) -> &'static str {
+        match self {
+            Scenario::Noise => {
+                "Relative noise `s (1 + p u)`, `u` uniform in [-1, 1], seeded; `rfta-default` is the default preset on the noisy grid; \"measured\" is the noise the check found (a fraction of the values)."
+            }
+            Scenario::Clamp => {
+                "Values clamped at `k h` (`h` the grid spacing): `sign(s) min(|s|, k h)`; `rfta-given` is the default preset told the clamp, `rfta-detected` the default preset left to detect it; \"measured\" is the clamp the check detected, in spacings (0: none)."
+            }
+        }
+    }
+
+    /// The rfta runs: label and whether the clamp is given.
+    fn runs(self) -> &'static [(&'static str, bool)] {
+        match self {
+            Scenario::Noise => &[("rfta-default", false)],
+            Scenario::Clamp => &[("rfta-given", true), ("rfta-detected", false)],
+        }
+    }
+
+    /// The grid's values at `level` (`h` the spacing; `rng` seeded for this grid and level).
+    fn apply(self, clean: &[f64], level: f64, h: f64, rng: &mut rfta_geom::rng::Rng) -> Vec<f64> {
+        match self {
+            Scenario::Noise => clean
+                .iter()
+                .map(|&s| s * (1.0 + level * (2.0 * rng.next_f64() - 1.0)))
+                .collect(),
+            Scenario::Clamp => clean
+                .iter()
+                .map(|&s| s.signum() * s.abs().min(level * h))
+                .collect(),
+        }
+    }
+}
+
+/// One run of a scenario.
+struct ScenarioRow {
     shape: String,
     n: usize,
-    noise: f64,
-    /// `rfta-default`, `mc` (on the noisy grid) or `mc-clean`.
-    method: &'static str,
+    level: f64,
+    /// An rfta run's label, `mc` (on the changed grid) or `mc-clean`.
+    method: String,
     cpu_seconds: f64,
     chamfer: f64,
-    /// Spheres near the surface (owners) and those of them left without a point (rfta only).
+    /// Spheres that may own points and those of them left without one (rfta only).
     owners: usize,
     without_point: usize,
-    /// The noise the check measured, as a fraction of the values (rfta only; 0: none).
+    /// What the check measured (see [`Scenario::explanation`]).
     measured: f64,
     status: String,
 }
 
-/// Runs the scenario over `shapes` at resolutions `res` and noise `levels` (0 is added: the clean
-/// grid), writing into `out`.
-pub(crate) fn noise(
+/// Runs `scenario` over `shapes` at resolutions `res` and `levels`, writing into `out`.
+pub(crate) fn run(
+    scenario: Scenario,
     shapes: &[Shape],
     res: &[usize],
     levels: &[f64],
@@ -47,8 +152,10 @@ pub(crate) fn noise(
     out: &Path,
 ) -> Result<()> {
     let mut levels: Vec<f64> = levels.to_vec();
-    if !levels.contains(&0.0) {
-        levels.insert(0, 0.0);
+    if let Some(clean) = scenario.clean_level()
+        && !levels.contains(&clean)
+    {
+        levels.insert(0, clean);
     }
     let bar = indicatif::ProgressBar::new((shapes.len() * res.len() * levels.len()) as u64);
     let mut rows = Vec::new();
@@ -69,21 +176,24 @@ pub(crate) fn noise(
         };
         for &n in res {
             let (grid, clean) = super::grid_for(shape, &gt_index, n)?;
+            let h = grid.spacing().max_element();
             let clean_mc = chamfer(&rfta_mc::marching_cubes(&grid, &clean, 0.0))?;
-            for (l, &p) in levels.iter().enumerate() {
-                bar.set_message(format!("{} n={n} noise {p}", shape.name));
+            for (l, &level) in levels.iter().enumerate() {
+                bar.set_message(format!(
+                    "{} n={n} {} {}",
+                    shape.name,
+                    scenario.name(),
+                    scenario.level_label(level)
+                ));
                 let mut rng = rfta_geom::rng::Rng::new(
                     0x006e_6f69_7365 ^ ((k as u64) << 32) ^ ((n as u64) << 16) ^ l as u64,
                 );
-                let values: Vec<f64> = clean
-                    .iter()
-                    .map(|&s| s * (1.0 + p * (2.0 * rng.next_f64() - 1.0)))
-                    .collect();
-                let row = |method, cpu_seconds, chamfer| NoiseRow {
+                let values = scenario.apply(&clean, level, h, &mut rng);
+                let row = |method: &str, cpu_seconds, chamfer| ScenarioRow {
                     shape: shape.name.clone(),
                     n,
-                    noise: p,
-                    method,
+                    level,
+                    method: method.to_string(),
                     cpu_seconds,
                     chamfer,
                     owners: 0,
@@ -94,96 +204,126 @@ pub(crate) fn noise(
                 rows.push(row("mc-clean", 0.0, clean_mc));
                 let t = Instant::now();
                 let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
-                let mc_cpu = t.elapsed().as_secs_f64();
-                rows.push(row("mc", mc_cpu, chamfer(&mc)?));
-                rows.push(run_rfta(&grid, values, &row, &chamfer)?);
+                rows.push(row("mc", t.elapsed().as_secs_f64(), chamfer(&mc)?));
+                for &(label, given) in scenario.runs() {
+                    let clamp = given.then_some(level * h);
+                    let base = row(label, 0.0, f64::NAN);
+                    rows.push(run_rfta(
+                        scenario, &grid, &values, clamp, h, base, &chamfer,
+                    )?);
+                }
                 bar.inc(1);
             }
         }
     }
     bar.finish_and_clear();
-    write_csv(&out.join("results.csv"), &rows)?;
-    write_markdown(&out.join("report.md"), &rows, &levels, res, samples)?;
-    let series: Vec<Line> = ["rfta-default", "mc", "mc-clean"]
+    write_csv(scenario, &out.join("results.csv"), &rows)?;
+    write_markdown(
+        scenario,
+        &out.join("report.md"),
+        &rows,
+        &levels,
+        res,
+        samples,
+    )?;
+    let mut methods: Vec<&str> = scenario.runs().iter().map(|r| r.0).collect();
+    methods.extend(["mc", "mc-clean"]);
+    let series: Vec<Line> = methods
         .iter()
         .map(|m| {
             let pts = levels
                 .iter()
-                .filter_map(|&p| mean_chamfer(&rows, m, p, None).map(|v| (100.0 * p, v)))
+                .filter_map(|&p| mean_chamfer(&rows, m, p, None).map(|v| (p, v)))
                 .collect();
             (m.to_string(), *m == "mc-clean", pts)
         })
         .collect();
     let ticks: Vec<(f64, String)> = levels
         .iter()
-        .map(|&p| (100.0 * p, format!("{}%", 100.0 * p)))
+        .map(|&p| (p, scenario.level_label(p)))
         .collect();
     line_chart(
         &out.join("chamfer.svg"),
-        "Mean Chamfer vs relative noise (log scale)",
-        "noise (% of the value)",
+        &format!("Mean Chamfer vs {} (log scale)", scenario.name()),
+        scenario.axis_label(),
         &ticks,
         &series,
         1,
     )
 }
 
-/// rfta's default preset on the noisy values (one thread, as the clean row it is compared with).
+/// rfta's default preset on one thread (the clean row it is compared with runs the same), with
+/// the clamp given or not; `row` holds the row's identity.
 fn run_rfta(
+    scenario: Scenario,
     grid: &Grid,
-    values: Vec<f64>,
-    row: &dyn Fn(&'static str, f64, f64) -> NoiseRow,
+    values: &[f64],
+    clamp: Option<f64>,
+    h: f64,
+    row: ScenarioRow,
     chamfer: &dyn Fn(&TriMesh) -> Result<f64>,
-) -> Result<NoiseRow> {
+) -> Result<ScenarioRow> {
     let params = rfta::Params {
         threads: Some(1),
+        clamp,
         ..rfta::Params::default()
     };
-    let samples = SdfSamples::grid(*grid, values)?;
+    let samples = SdfSamples::grid(*grid, values.to_vec())?;
     let cpu = crate::bench::process_usage().0;
     let result = rfta::reconstruct(&samples, &params);
     let cpu_seconds = crate::bench::process_usage().0 - cpu;
     Ok(match result {
         Ok(out) => {
             let r = &out.report;
-            NoiseRow {
-                owners: r.samples - r.far_spheres,
-                without_point: r.spheres_without_point,
-                measured: r.radius_scale.map_or(0.0, |s| s.powf(-0.5) - 1.0),
-                ..row("rfta-default", cpu_seconds, chamfer(&out.mesh)?)
+            // Clamped spheres own no point by design: neither owners nor missing ones.
+            let clamped = r
+                .clamp
+                .map_or(0, |c| values.iter().filter(|v| v.abs() >= c).count());
+            ScenarioRow {
+                cpu_seconds,
+                chamfer: chamfer(&out.mesh)?,
+                owners: (r.samples - r.far_spheres).saturating_sub(clamped),
+                without_point: r.spheres_without_point.saturating_sub(clamped),
+                measured: match scenario {
+                    Scenario::Noise => r.radius_scale.map_or(0.0, |s| s.powf(-0.5) - 1.0),
+                    Scenario::Clamp => r.clamp.map_or(0.0, |c| c / h),
+                },
+                ..row
             }
         }
-        Err(e) => NoiseRow {
+        Err(e) => ScenarioRow {
+            cpu_seconds,
             status: match e {
                 rfta::Error::NotADistance(_) => format!("refused: {e}"),
                 _ => format!("failed: {e}"),
             },
-            ..row("rfta-default", cpu_seconds, f64::NAN)
+            ..row
         },
     })
 }
 
-fn mean_chamfer(rows: &[NoiseRow], method: &str, noise: f64, n: Option<usize>) -> Option<f64> {
+fn mean_chamfer(rows: &[ScenarioRow], method: &str, level: f64, n: Option<usize>) -> Option<f64> {
     let v: Vec<f64> = rows
         .iter()
-        .filter(|r| r.method == method && r.noise == noise && n.is_none_or(|n| r.n == n))
+        .filter(|r| r.method == method && r.level == level && n.is_none_or(|n| r.n == n))
         .map(|r| r.chamfer)
         .filter(|c| c.is_finite())
         .collect();
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
 
-fn write_csv(path: &Path, rows: &[NoiseRow]) -> Result<()> {
+fn write_csv(scenario: Scenario, path: &Path, rows: &[ScenarioRow]) -> Result<()> {
     let mut s = String::from(
-        "scenario,shape,n,noise,method,cpu_seconds,chamfer,owners,without_point,measured_noise,status\n",
+        "scenario,shape,n,level,method,cpu_seconds,chamfer,owners,without_point,measured,status\n",
     );
     for r in rows {
         writeln!(
             s,
-            "noise,{},{},{},{},{:.4},{:.6},{},{},{:.5},\"{}\"",
+            "{},{},{},{},{},{:.4},{:.6},{},{},{:.5},\"{}\"",
+            scenario.name(),
             r.shape,
             r.n,
-            r.noise,
+            r.level,
             r.method,
             r.cpu_seconds,
             r.chamfer,
@@ -198,78 +338,91 @@ fn write_csv(path: &Path, rows: &[NoiseRow]) -> Result<()> {
 }
 
 fn write_markdown(
+    scenario: Scenario,
     path: &Path,
-    rows: &[NoiseRow],
+    rows: &[ScenarioRow],
     levels: &[f64],
     res: &[usize],
     samples: usize,
 ) -> Result<()> {
-    let mut s = String::from("# Scenario: noise (the paper's Figure 23)\n\n");
+    let mut s = format!("# Scenario: {}\n\n", scenario.title());
     writeln!(
         s,
-        "Relative noise `s (1 + p u)`, `u` uniform in [-1, 1], seeded; rfta's default preset on one thread; Chamfer with {samples} samples per side. \"kept\" is the share of the spheres near the surface that ended with a tangency point; CPU is rfta's time against the clean grid's.\n"
+        "{} Runs on one thread; Chamfer with {samples} samples per side. \"kept\" is the share of the spheres that may own a point (near the surface, not clamped) that ended with one, for the worst shape; \"CPU / clean\" is the largest ratio of a run's CPU time to the clean grid's (noise only).\n",
+        scenario.explanation()
     )?;
+    let fmt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.5}"));
     for &n in res {
         writeln!(s, "## N = {n}\n")?;
-        s.push_str("| noise | rfta-default | mc (noisy) | mc (clean) | kept, worst shape | CPU / clean, worst shape | measured noise, mean | refused |\n|---|---|---|---|---|---|---|---|\n");
-        for &p in levels {
-            let fmt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.5}"));
-            let ours: Vec<&NoiseRow> = rows
-                .iter()
-                .filter(|r| r.n == n && r.noise == p && r.method == "rfta-default")
-                .collect();
-            let kept = ours
-                .iter()
-                .filter(|r| r.status == "ok")
-                .map(|r| 1.0 - r.without_point as f64 / r.owners.max(1) as f64)
-                .fold(f64::INFINITY, f64::min);
-            let slowdown = ours
-                .iter()
-                .filter(|r| r.status == "ok")
-                .filter_map(|r| {
-                    rows.iter()
-                        .find(|c| {
-                            c.shape == r.shape
-                                && c.n == n
-                                && c.noise == 0.0
-                                && c.method == "rfta-default"
+        for &(method, _) in scenario.runs() {
+            writeln!(s, "`{method}`:\n")?;
+            s.push_str("| level | Chamfer | mc (changed grid) | mc (clean grid) | kept, worst shape | CPU / clean, worst shape | measured, mean | refused |\n|---|---|---|---|---|---|---|---|\n");
+            for &level in levels {
+                let ours: Vec<&ScenarioRow> = rows
+                    .iter()
+                    .filter(|r| r.n == n && r.level == level && r.method == method)
+                    .collect();
+                let ok: Vec<&&ScenarioRow> = ours.iter().filter(|r| r.status == "ok").collect();
+                let kept = ok
+                    .iter()
+                    .map(|r| 1.0 - r.without_point as f64 / r.owners.max(1) as f64)
+                    .fold(f64::INFINITY, f64::min);
+                let slowdown = scenario.clean_level().and_then(|clean| {
+                    ok.iter()
+                        .filter_map(|r| {
+                            rows.iter()
+                                .find(|c| {
+                                    c.shape == r.shape
+                                        && c.n == n
+                                        && c.level == clean
+                                        && c.method == method
+                                })
+                                .map(|c| r.cpu_seconds / c.cpu_seconds.max(1e-9))
                         })
-                        .map(|c| r.cpu_seconds / c.cpu_seconds.max(1e-9))
-                })
-                .fold(0.0, f64::max);
-            let measured = ours.iter().map(|r| r.measured).sum::<f64>() / ours.len().max(1) as f64;
-            let refused = ours
-                .iter()
-                .filter(|r| r.status.starts_with("refused"))
-                .count();
-            writeln!(
-                s,
-                "| {}% | {} | {} | {} | {:.1}% | {slowdown:.2} | {:.2}% | {refused} of {} |",
-                100.0 * p,
-                fmt(mean_chamfer(rows, "rfta-default", p, Some(n))),
-                fmt(mean_chamfer(rows, "mc", p, Some(n))),
-                fmt(mean_chamfer(rows, "mc-clean", p, Some(n))),
-                if kept.is_finite() { 100.0 * kept } else { 0.0 },
-                100.0 * measured,
-                ours.len()
-            )?;
+                        .reduce(f64::max)
+                });
+                let measured = ok.iter().map(|r| r.measured).sum::<f64>() / ok.len().max(1) as f64;
+                let refused = ours
+                    .iter()
+                    .filter(|r| r.status.starts_with("refused"))
+                    .count();
+                writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {} | {} | {} | {refused} of {} |",
+                    scenario.level_label(level),
+                    fmt(mean_chamfer(rows, method, level, Some(n))),
+                    fmt(mean_chamfer(rows, "mc", level, Some(n))),
+                    fmt(mean_chamfer(rows, "mc-clean", level, Some(n))),
+                    if kept.is_finite() {
+                        format!("{:.1}%", 100.0 * kept)
+                    } else {
+                        "-".into()
+                    },
+                    slowdown.map_or("-".into(), |v| format!("{v:.2}")),
+                    match scenario {
+                        Scenario::Noise => format!("{:.2}%", 100.0 * measured),
+                        Scenario::Clamp => format!("{measured:.2} h"),
+                    },
+                    ours.len()
+                )?;
+            }
+            s.push('\n');
         }
-        s.push('\n');
     }
-    s.push_str("## Every run\n\n| shape | N | noise | method | CPU s | Chamfer | without a point | measured noise | status |\n|---|---|---|---|---|---|---|---|---|\n");
+    s.push_str("## Every run\n\n| shape | N | level | method | CPU s | Chamfer | without a point | measured | status |\n|---|---|---|---|---|---|---|---|---|\n");
     for r in rows.iter().filter(|r| r.method != "mc-clean") {
         writeln!(
             s,
-            "| {} | {} | {}% | {} | {:.2} | {:.5} | {} of {} | {:.2}% | {} |",
+            "| {} | {} | {} | {} | {:.2} | {:.5} | {} of {} | {:.4} | {} |",
             r.shape,
             r.n,
-            100.0 * r.noise,
+            scenario.level_label(r.level),
             r.method,
             r.cpu_seconds,
             r.chamfer,
             r.without_point,
             r.owners,
-            100.0 * r.measured,
+            r.measured,
             r.status
         )?;
     }
