@@ -5,11 +5,11 @@
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
 //!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
 //!                  [--out DIR]
-//! cargo xtask eval --scenario noise,clamp [--levels L,..] [--inputs DIR] [--res ..] [--quick]
+//! cargo xtask eval --scenario noise,clamp,params [--levels L,..] [--inputs DIR] [--res ..] [--quick]
 //! ```
 //!
-//! `--scenario` runs the paper's Figures 23 (noise) and 24 (clamp) instead of Table 2, each into
-//! `<out>/<scenario>/` ([`scenario`]).
+//! `--scenario` runs the paper's Figures 23 (noise), 24 (clamp) and 11 to 13 (`params`: raster,
+//! batch, rounds) instead of Table 2, each into `<out>/<scenario>/` ([`scenario`]).
 //!
 //! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
 //! depth matched to the sample spacing, and `--owner-band K` gives points to the spheres within
@@ -142,13 +142,20 @@ fn parse(args: &[String]) -> Result<Args> {
             "--quick" => a.quick = true,
             "--scenario" => {
                 for name in value()?.split(',').map(str::trim) {
+                    if name == "params" {
+                        a.scenarios.extend(scenario::Scenario::PARAMS);
+                        continue;
+                    }
                     let Some(sc) = scenario::Scenario::ALL
                         .into_iter()
                         .find(|s| s.name() == name)
                     else {
                         let known: Vec<&str> =
                             scenario::Scenario::ALL.iter().map(|s| s.name()).collect();
-                        bail!("unknown scenario '{name}' (known: {})", known.join(", "));
+                        bail!(
+                            "unknown scenario '{name}' (known: {}, params)",
+                            known.join(", ")
+                        );
                     };
                     a.scenarios.push(sc);
                 }

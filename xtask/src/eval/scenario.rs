@@ -6,6 +6,8 @@
 //! - `clamp` (Figure 24): each grid's values are clamped at `k h` (`h` the grid spacing), for each
 //!   `k`; rfta's default preset runs with the clamp given (`--clamp`) and without it (detected by
 //!   the check).
+//! - `params` = `rounds`, `raster`, `batch` (Figures 13, 11, 12): the default preset on the clean
+//!   grids of two shapes with one parameter swept.
 //!
 //! Marching cubes runs on the changed grid and on the clean one. Per row: Chamfer against the
 //! ground truth, CPU time, the spheres left without a tangency point, what the check measured
@@ -34,15 +36,41 @@ pub(crate) const CLAMP_LEVELS: [f64; 3] = [4.0, 2.0, 1.0];
 pub(crate) enum Scenario {
     Noise,
     Clamp,
+    /// Figure 13: fine-tuning rounds.
+    Rounds,
+    /// Figure 11: rasterization resolution.
+    Raster,
+    /// Figure 12: spheres per feasibility batch.
+    Batch,
 }
 
 impl Scenario {
-    pub(crate) const ALL: [Scenario; 2] = [Scenario::Noise, Scenario::Clamp];
+    pub(crate) const ALL: [Scenario; 5] = [
+        Scenario::Noise,
+        Scenario::Clamp,
+        Scenario::Rounds,
+        Scenario::Raster,
+        Scenario::Batch,
+    ];
+
+    /// `params` names the three parameter sweeps.
+    pub(crate) const PARAMS: [Scenario; 3] = [Scenario::Rounds, Scenario::Raster, Scenario::Batch];
 
     pub(crate) fn name(self) -> &'static str {
         match self {
             Scenario::Noise => "noise",
             Scenario::Clamp => "clamp",
+            Scenario::Rounds => "rounds",
+            Scenario::Raster => "raster",
+            Scenario::Batch => "batch",
+        }
+    }
+
+    /// The parameter sweeps run on two shapes (the paper's Figures 11 to 13 use a few).
+    pub(crate) fn shapes(self) -> usize {
+        match self {
+            Scenario::Noise | Scenario::Clamp => usize::MAX,
+            _ => 2,
         }
     }
 
@@ -51,6 +79,10 @@ impl Scenario {
         match self {
             Scenario::Noise => NOISE_LEVELS.to_vec(),
             Scenario::Clamp => CLAMP_LEVELS.to_vec(),
+            Scenario::Rounds => vec![0.0, 1.0, 3.0, 5.0, 10.0, 20.0],
+            Scenario::Raster => vec![32.0, 64.0, 128.0, 256.0, 512.0],
+            // 0: every sphere in one batch.
+            Scenario::Batch => vec![300.0, 1000.0, 3000.0, 10000.0, 0.0],
         }
     }
 
@@ -59,6 +91,9 @@ impl Scenario {
         match self {
             Scenario::Noise => vec![0.01, 0.02],
             Scenario::Clamp => vec![2.0],
+            Scenario::Rounds => vec![1.0, 3.0],
+            Scenario::Raster => vec![64.0, 128.0],
+            Scenario::Batch => vec![1000.0, 0.0],
         }
     }
 
@@ -67,6 +102,9 @@ impl Scenario {
         match self {
             Scenario::Noise => Some(0.0),
             Scenario::Clamp => None,
+            // The default setting.
+            Scenario::Rounds => Some(10.0),
+            Scenario::Raster | Scenario::Batch => None,
         }
     }
 
@@ -74,6 +112,17 @@ impl Scenario {
         match self {
             Scenario::Noise => format!("{}%", 100.0 * level),
             Scenario::Clamp => format!("{level} h"),
+            Scenario::Batch if level == 0.0 => "all".into(),
+            _ => format!("{level}"),
+        }
+    }
+
+    /// Where level `level`, the `i`-th, goes on a chart's x axis: at its value, or in order for
+    /// the batch sizes (whose last, "all", is 0).
+    fn chart_x(self, i: usize, level: f64) -> f64 {
+        match self {
+            Scenario::Batch => i as f64,
+            _ => level,
         }
     }
 
@@ -81,6 +130,9 @@ impl Scenario {
         match self {
             Scenario::Noise => "noise (% of the value)",
             Scenario::Clamp => "clamp (grid spacings)",
+            Scenario::Rounds => "fine-tuning rounds",
+            Scenario::Raster => "rasterization cells per axis",
+            Scenario::Batch => "spheres per batch (last: all)",
         }
     }
 
@@ -88,6 +140,9 @@ impl Scenario {
         match self {
             Scenario::Noise => "noise (the paper's Figure 23)",
             Scenario::Clamp => "clamp (the paper's Figure 24)",
+            Scenario::Rounds => "fine-tuning rounds (the paper's Figure 13)",
+            Scenario::Raster => "rasterization resolution (the paper's Figure 11)",
+            Scenario::Batch => "batch size (the paper's Figure 12)",
         }
     }
 
@@ -99,14 +154,23 @@ impl Scenario {
             Scenario::Clamp => {
                 "Values clamped at `k h` (`h` the grid spacing): `sign(s) min(|s|, k h)`; `rfta-given` is the default preset told the clamp, `rfta-detected` the default preset left to detect it; \"measured\" is the clamp the check detected, in spacings (0: none)."
             }
+            Scenario::Rounds => {
+                "The default preset with `Params::rounds` (the paper's k_max) set to each level on the clean grid; the default is 10."
+            }
+            Scenario::Raster => {
+                "The default preset with `Params::raster_resolution` set to each level on the clean grid; the default is the paper's `64 ceil(n^(1/3) / 16)` (128 at N = 20 and 30)."
+            }
+            Scenario::Batch => {
+                "The default preset with `Params::batch_size` (the paper's b) set to each level on the clean grid (all: every sphere in every feasibility test); the default is 10^4, which holds all of a 21^3 or 31^3 grid."
+            }
         }
     }
 
     /// The rfta runs: label and whether the clamp is given.
     fn runs(self) -> &'static [(&'static str, bool)] {
         match self {
-            Scenario::Noise => &[("rfta-default", false)],
             Scenario::Clamp => &[("rfta-given", true), ("rfta-detected", false)],
+            _ => &[("rfta-default", false)],
         }
     }
 
@@ -121,6 +185,32 @@ impl Scenario {
                 .iter()
                 .map(|&s| s.signum() * s.abs().min(level * h))
                 .collect(),
+            Scenario::Rounds | Scenario::Raster | Scenario::Batch => clean.to_vec(),
+        }
+    }
+
+    /// The default preset on one thread (the clean row it is compared with runs the same), set
+    /// for `level`: the clamp when `given` (`level` spacings of `h`), or the swept parameter.
+    fn params(self, level: f64, h: f64, given: bool) -> rfta::Params {
+        let base = rfta::Params {
+            threads: Some(1),
+            clamp: given.then_some(level * h),
+            ..rfta::Params::default()
+        };
+        match self {
+            Scenario::Rounds => rfta::Params {
+                rounds: level as usize,
+                ..base
+            },
+            Scenario::Raster => rfta::Params {
+                raster_resolution: Some(level as usize),
+                ..base
+            },
+            Scenario::Batch => rfta::Params {
+                batch_size: level as usize,
+                ..base
+            },
+            Scenario::Noise | Scenario::Clamp => base,
         }
     }
 }
@@ -152,11 +242,13 @@ pub(crate) fn run(
     out: &Path,
 ) -> Result<()> {
     let mut levels: Vec<f64> = levels.to_vec();
-    if let Some(clean) = scenario.clean_level()
-        && !levels.contains(&clean)
-    {
-        levels.insert(0, clean);
+    if let Some(clean) = scenario.clean_level() {
+        if !levels.contains(&clean) {
+            levels.push(clean);
+        }
+        levels.sort_by(f64::total_cmp);
     }
+    let shapes = &shapes[..shapes.len().min(scenario.shapes())];
     let bar = indicatif::ProgressBar::new((shapes.len() * res.len() * levels.len()) as u64);
     let mut rows = Vec::new();
     for (k, shape) in shapes.iter().enumerate() {
@@ -206,10 +298,10 @@ pub(crate) fn run(
                 let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
                 rows.push(row("mc", t.elapsed().as_secs_f64(), chamfer(&mc)?));
                 for &(label, given) in scenario.runs() {
-                    let clamp = given.then_some(level * h);
+                    let params = scenario.params(level, h, given);
                     let base = row(label, 0.0, f64::NAN);
                     rows.push(run_rfta(
-                        scenario, &grid, &values, clamp, h, base, &chamfer,
+                        scenario, &grid, &values, &params, h, base, &chamfer,
                     )?);
                 }
                 bar.inc(1);
@@ -233,14 +325,18 @@ pub(crate) fn run(
         .map(|m| {
             let pts = levels
                 .iter()
-                .filter_map(|&p| mean_chamfer(&rows, m, p, None).map(|v| (p, v)))
+                .enumerate()
+                .filter_map(|(i, &p)| {
+                    mean_chamfer(&rows, m, p, None).map(|v| (scenario.chart_x(i, p), v))
+                })
                 .collect();
             (m.to_string(), *m == "mc-clean", pts)
         })
         .collect();
     let ticks: Vec<(f64, String)> = levels
         .iter()
-        .map(|&p| (p, scenario.level_label(p)))
+        .enumerate()
+        .map(|(i, &p)| (scenario.chart_x(i, p), scenario.level_label(p)))
         .collect();
     line_chart(
         &out.join("chamfer.svg"),
@@ -252,25 +348,19 @@ pub(crate) fn run(
     )
 }
 
-/// rfta's default preset on one thread (the clean row it is compared with runs the same), with
-/// the clamp given or not; `row` holds the row's identity.
+/// rfta with `params` on `values`; `row` holds the row's identity.
 fn run_rfta(
     scenario: Scenario,
     grid: &Grid,
     values: &[f64],
-    clamp: Option<f64>,
+    params: &rfta::Params,
     h: f64,
     row: ScenarioRow,
     chamfer: &dyn Fn(&TriMesh) -> Result<f64>,
 ) -> Result<ScenarioRow> {
-    let params = rfta::Params {
-        threads: Some(1),
-        clamp,
-        ..rfta::Params::default()
-    };
     let samples = SdfSamples::grid(*grid, values.to_vec())?;
     let cpu = crate::bench::process_usage().0;
-    let result = rfta::reconstruct(&samples, &params);
+    let result = rfta::reconstruct(&samples, params);
     let cpu_seconds = crate::bench::process_usage().0 - cpu;
     Ok(match result {
         Ok(out) => {
@@ -287,6 +377,7 @@ fn run_rfta(
                 measured: match scenario {
                     Scenario::Noise => r.radius_scale.map_or(0.0, |s| s.powf(-0.5) - 1.0),
                     Scenario::Clamp => r.clamp.map_or(0.0, |c| c / h),
+                    _ => 0.0,
                 },
                 ..row
             }
@@ -348,7 +439,7 @@ fn write_markdown(
     let mut s = format!("# Scenario: {}\n\n", scenario.title());
     writeln!(
         s,
-        "{} Runs on one thread; Chamfer with {samples} samples per side. \"kept\" is the share of the spheres that may own a point (near the surface, not clamped) that ended with one, for the worst shape; \"CPU / clean\" is the largest ratio of a run's CPU time to the clean grid's (noise only).\n",
+        "{} Runs on one thread; Chamfer with {samples} samples per side. \"kept\" is the share of the spheres that may own a point (near the surface, not clamped) that ended with one, for the worst shape; \"CPU / clean\" is the largest ratio of a run's CPU time to the clean grid's (noise) or the default setting's (rounds).\n",
         scenario.explanation()
     )?;
     let fmt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.5}"));
@@ -402,6 +493,7 @@ fn write_markdown(
                     match scenario {
                         Scenario::Noise => format!("{:.2}%", 100.0 * measured),
                         Scenario::Clamp => format!("{measured:.2} h"),
+                        _ => "-".into(),
                     },
                     ours.len()
                 )?;
