@@ -8,6 +8,9 @@
 //!   the check).
 //! - `params` = `rounds`, `raster`, `batch` (Figures 13, 11, 12): the default preset on the clean
 //!   grids of two shapes with one parameter swept.
+//! - `scattered`: as many samples as each grid has, uniform in its box or near the surface as
+//!   DeepSDF draws them, at exact signed distances; the default preset on them against the grid of
+//!   the same count (rfta and marching cubes).
 //!
 //! Marching cubes runs on the changed grid and on the clean one. Per row: Chamfer against the
 //! ground truth, CPU time, the spheres left without a tangency point, what the check measured
@@ -19,6 +22,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use rfta_geom::glam::DVec3;
 use rfta_geom::{Grid, SdfSamples, TriMesh};
 use rfta_mesh::MeshIndex;
 
@@ -27,6 +31,10 @@ use super::report::{Line, line_chart};
 
 /// The noise levels of the paper's Figure 23 (fractions of the values).
 pub(crate) const NOISE_LEVELS: [f64; 4] = [0.005, 0.01, 0.02, 0.05];
+
+/// The levels of the scattered scenario: the two distributions.
+const UNIFORM: f64 = 0.0;
+const NEAR_SURFACE: f64 = 1.0;
 
 /// The clamps of the paper's Figure 24 (grid spacings).
 pub(crate) const CLAMP_LEVELS: [f64; 3] = [4.0, 2.0, 1.0];
@@ -42,12 +50,15 @@ pub(crate) enum Scenario {
     Raster,
     /// Figure 12: spheres per feasibility batch.
     Batch,
+    /// Scattered samples (uniform, or near the surface as DeepSDF draws them) as many as a grid's.
+    Scattered,
 }
 
 impl Scenario {
-    pub(crate) const ALL: [Scenario; 5] = [
+    pub(crate) const ALL: [Scenario; 6] = [
         Scenario::Noise,
         Scenario::Clamp,
+        Scenario::Scattered,
         Scenario::Rounds,
         Scenario::Raster,
         Scenario::Batch,
@@ -63,13 +74,14 @@ impl Scenario {
             Scenario::Rounds => "rounds",
             Scenario::Raster => "raster",
             Scenario::Batch => "batch",
+            Scenario::Scattered => "scattered",
         }
     }
 
     /// The parameter sweeps run on two shapes (the paper's Figures 11 to 13 use a few).
     pub(crate) fn shapes(self) -> usize {
         match self {
-            Scenario::Noise | Scenario::Clamp => usize::MAX,
+            Scenario::Noise | Scenario::Clamp | Scenario::Scattered => usize::MAX,
             _ => 2,
         }
     }
@@ -83,6 +95,7 @@ impl Scenario {
             Scenario::Raster => vec![32.0, 64.0, 128.0, 256.0, 512.0],
             // 0: every sphere in one batch.
             Scenario::Batch => vec![300.0, 1000.0, 3000.0, 10000.0, 0.0],
+            Scenario::Scattered => vec![UNIFORM, NEAR_SURFACE],
         }
     }
 
@@ -94,6 +107,7 @@ impl Scenario {
             Scenario::Rounds => vec![1.0, 3.0],
             Scenario::Raster => vec![64.0, 128.0],
             Scenario::Batch => vec![1000.0, 0.0],
+            Scenario::Scattered => vec![NEAR_SURFACE],
         }
     }
 
@@ -104,7 +118,7 @@ impl Scenario {
             Scenario::Clamp => None,
             // The default setting.
             Scenario::Rounds => Some(10.0),
-            Scenario::Raster | Scenario::Batch => None,
+            Scenario::Raster | Scenario::Batch | Scenario::Scattered => None,
         }
     }
 
@@ -113,6 +127,8 @@ impl Scenario {
             Scenario::Noise => format!("{}%", 100.0 * level),
             Scenario::Clamp => format!("{level} h"),
             Scenario::Batch if level == 0.0 => "all".into(),
+            Scenario::Scattered if level == UNIFORM => "uniform".into(),
+            Scenario::Scattered => "near-surface".into(),
             _ => format!("{level}"),
         }
     }
@@ -121,7 +137,7 @@ impl Scenario {
     /// the batch sizes (whose last, "all", is 0).
     fn chart_x(self, i: usize, level: f64) -> f64 {
         match self {
-            Scenario::Batch => i as f64,
+            Scenario::Batch | Scenario::Scattered => i as f64,
             _ => level,
         }
     }
@@ -133,6 +149,7 @@ impl Scenario {
             Scenario::Rounds => "fine-tuning rounds",
             Scenario::Raster => "rasterization cells per axis",
             Scenario::Batch => "spheres per batch (last: all)",
+            Scenario::Scattered => "sample distribution",
         }
     }
 
@@ -143,6 +160,7 @@ impl Scenario {
             Scenario::Rounds => "fine-tuning rounds (the paper's Figure 13)",
             Scenario::Raster => "rasterization resolution (the paper's Figure 11)",
             Scenario::Batch => "batch size (the paper's Figure 12)",
+            Scenario::Scattered => "scattered samples",
         }
     }
 
@@ -160,6 +178,9 @@ impl Scenario {
             Scenario::Raster => {
                 "The default preset with `Params::raster_resolution` set to each level on the clean grid; the default is the paper's `64 ceil(n^(1/3) / 16)` (128 at N = 20 and 30)."
             }
+            Scenario::Scattered => {
+                "As many samples as the grid of each N has, at exact signed distances from the ground truth: uniform in the grid's box, or near the surface as DeepSDF draws them (scaled to the box side L: 5% uniform, the rest on the surface plus Gaussian offsets of 0.008 L for one half and 0.025 L for the other); `rfta-default` is the default preset on them (scattered samples: every sphere owns points), `rfta-grid` the default preset on the grid of the same count; marching cubes cannot run on scattered samples, so both mc columns are the grid's."
+            }
             Scenario::Batch => {
                 "The default preset with `Params::batch_size` (the paper's b) set to each level on the clean grid (all: every sphere in every feasibility test); the default is 10^4, which holds all of a 21^3 or 31^3 grid."
             }
@@ -170,6 +191,7 @@ impl Scenario {
     fn runs(self) -> &'static [(&'static str, bool)] {
         match self {
             Scenario::Clamp => &[("rfta-given", true), ("rfta-detected", false)],
+            Scenario::Scattered => &[("rfta-default", false), ("rfta-grid", false)],
             _ => &[("rfta-default", false)],
         }
     }
@@ -185,7 +207,9 @@ impl Scenario {
                 .iter()
                 .map(|&s| s.signum() * s.abs().min(level * h))
                 .collect(),
-            Scenario::Rounds | Scenario::Raster | Scenario::Batch => clean.to_vec(),
+            Scenario::Rounds | Scenario::Raster | Scenario::Batch | Scenario::Scattered => {
+                clean.to_vec()
+            }
         }
     }
 
@@ -210,7 +234,7 @@ impl Scenario {
                 batch_size: level as usize,
                 ..base
             },
-            Scenario::Noise | Scenario::Clamp => base,
+            Scenario::Noise | Scenario::Clamp | Scenario::Scattered => base,
         }
     }
 }
@@ -300,9 +324,13 @@ pub(crate) fn run(
                 for &(label, given) in scenario.runs() {
                     let params = scenario.params(level, h, given);
                     let base = row(label, 0.0, f64::NAN);
-                    rows.push(run_rfta(
-                        scenario, &grid, &values, &params, h, base, &chamfer,
-                    )?);
+                    let samples = if scenario == Scenario::Scattered && label == "rfta-default" {
+                        let seed = rng.next_u64();
+                        scattered(&shape.gt, &gt_index, &grid, level, seed)?
+                    } else {
+                        SdfSamples::grid(grid, values.clone())?
+                    };
+                    rows.push(run_rfta(scenario, &samples, &params, h, base, &chamfer)?);
                 }
                 bar.inc(1);
             }
@@ -348,19 +376,59 @@ pub(crate) fn run(
     )
 }
 
-/// rfta with `params` on `values`; `row` holds the row's identity.
+/// `grid.len()` scattered samples of `gt` at exact signed distances: uniform in the grid's box
+/// (`level` [`UNIFORM`]) or near the surface, as DeepSDF draws them ([`NEAR_SURFACE`]).
+fn scattered(
+    gt: &TriMesh,
+    index: &MeshIndex,
+    grid: &Grid,
+    level: f64,
+    seed: u64,
+) -> Result<SdfSamples> {
+    let n = grid.len();
+    let b = grid.bounds();
+    let side = (b.max - b.min).max_element();
+    let mut rng = rfta_geom::rng::Rng::new(seed);
+    let uniform = |rng: &mut rfta_geom::rng::Rng| {
+        b.min + (b.max - b.min) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
+    };
+    let positions: Vec<DVec3> = if level == UNIFORM {
+        (0..n).map(|_| uniform(&mut rng)).collect()
+    } else {
+        let n_uniform = n / 20;
+        let on = rfta_mesh::sample_surface(gt, n - n_uniform, seed ^ 0x5eed);
+        let gauss = |rng: &mut rfta_geom::rng::Rng| {
+            // Box-Muller.
+            let (u, v) = (rng.next_f64().max(f64::MIN_POSITIVE), rng.next_f64());
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        };
+        let mut p: Vec<DVec3> = on
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let sigma = if i % 2 == 0 { 0.008 } else { 0.025 } * side;
+                s.point + sigma * DVec3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng))
+            })
+            .collect();
+        p.extend((0..n_uniform).map(|_| uniform(&mut rng)));
+        p
+    };
+    let values = index.signed_distances(&positions);
+    Ok(SdfSamples::scattered(positions, values)?)
+}
+
+/// rfta with `params` on `samples`; `row` holds the row's identity.
 fn run_rfta(
     scenario: Scenario,
-    grid: &Grid,
-    values: &[f64],
+    samples: &SdfSamples,
     params: &rfta::Params,
     h: f64,
     row: ScenarioRow,
     chamfer: &dyn Fn(&TriMesh) -> Result<f64>,
 ) -> Result<ScenarioRow> {
-    let samples = SdfSamples::grid(*grid, values.to_vec())?;
+    let values = samples.values();
     let cpu = crate::bench::process_usage().0;
-    let result = rfta::reconstruct(&samples, params);
+    let result = rfta::reconstruct(samples, params);
     let cpu_seconds = crate::bench::process_usage().0 - cpu;
     Ok(match result {
         Ok(out) => {
