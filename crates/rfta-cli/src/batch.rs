@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 
-use crate::reconstruct::{Preset, Tuning};
+use crate::reconstruct::{Checks, Preset, Tuning};
 use crate::ui::{Exit, Ui, parse_bounds};
 
 #[derive(Debug, clap::Args)]
@@ -47,15 +47,9 @@ pub(crate) struct Args {
     /// Join these status files (of the shards of one manifest) into one table and print totals.
     #[arg(long, value_name = "STATUS", num_args = 1.., conflicts_with_all = ["manifest", "dry_run"])]
     merge: Vec<PathBuf>,
-    /// Per row: the SDF was clamped at this magnitude (as `reconstruct --clamp`).
-    #[arg(long)]
-    clamp: Option<f64>,
-    /// Per row: do not inspect the values (as `reconstruct --no-check`).
-    #[arg(long)]
-    no_check: bool,
-    /// Per row: refuse inputs whose estimated peak memory exceeds this (as `reconstruct`).
-    #[arg(long, value_name = "SIZE", value_parser = crate::ui::parse_size)]
-    max_memory: Option<u64>,
+    /// Every row's input options, as `reconstruct`'s.
+    #[command(flatten)]
+    checks: Checks,
     #[command(flatten)]
     tuning: Tuning,
 }
@@ -206,8 +200,10 @@ impl StatusRow {
 /// What a manifest row's optional columns add.
 #[derive(Debug, Default)]
 struct RowArgs {
-    /// `--bounds`, `--clamp`.
+    /// `--bounds`.
     args: Vec<String>,
+    /// The row's clamp, in place of `--clamp`.
+    clamp: Option<f64>,
     /// The row's preset, in place of `--preset`.
     preset: Option<Preset>,
 }
@@ -285,7 +281,8 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
     let runner = Runner {
         exe: std::env::current_exe().context("cannot find the rfta executable")?,
         base: base.to_path_buf(),
-        common: common_args(&args, per_row),
+        threads: per_row,
+        checks: args.checks.clone(),
         tuning: args.tuning.clone(),
         timeout: args.timeout.map(Duration::from_secs_f64),
     };
@@ -376,26 +373,13 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
     Ok(())
 }
 
-/// The `reconstruct` options every row gets.
-fn common_args(args: &Args, threads: usize) -> Vec<String> {
-    let mut a = vec!["-q".to_string(), "--threads".into(), threads.to_string()];
-    if let Some(c) = args.clamp {
-        a.extend(["--clamp".into(), c.to_string()]);
-    }
-    if args.no_check {
-        a.push("--no-check".into());
-    }
-    if let Some(m) = &args.max_memory {
-        a.extend(["--max-memory".into(), format!("{m}B")]);
-    }
-    a
-}
-
 /// Runs rows as child processes.
 struct Runner {
     exe: PathBuf,
     base: PathBuf,
-    common: Vec<String>,
+    /// Threads per row.
+    threads: usize,
+    checks: Checks,
     tuning: Tuning,
     timeout: Option<Duration>,
 }
@@ -447,7 +431,8 @@ impl Runner {
             .arg(&output)
             .arg("--report")
             .arg(&report)
-            .args(&self.common)
+            .args(["-q", "--threads", &self.threads.to_string()])
+            .args(self.checks.to_args(extra.clamp))
             .args(self.tuning.to_args(extra.preset))
             .args(&extra.args)
             .stdin(Stdio::null())
@@ -650,19 +635,23 @@ fn row_args(
         parse_bounds(&joined).map_err(|e| format!("bounds: {e}"))?;
         a.push(format!("--bounds={joined}"));
     }
-    if let Some(c) = clamp {
-        match c.parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 => a.extend(["--clamp".into(), c]),
-            _ => return Err(format!("clamp: '{c}' is not a positive number")),
-        }
-    }
+    let clamp = clamp
+        .map(|c| match c.parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            _ => Err(format!("clamp: '{c}' is not a positive number")),
+        })
+        .transpose()?;
     let preset = preset
         .map(|p| {
             <Preset as clap::ValueEnum>::from_str(&p, true)
                 .map_err(|_| format!("preset: '{p}' is not one of default, paper, fast"))
         })
         .transpose()?;
-    Ok(RowArgs { args: a, preset })
+    Ok(RowArgs {
+        args: a,
+        clamp,
+        preset,
+    })
 }
 
 /// Splits one CSV line (RFC 4180 quoting: fields in double quotes may hold commas, `""` is a
@@ -882,6 +871,30 @@ mod tests {
         assert!(parse_shard("3/3").is_err());
         assert!(parse_shard("1/0").is_err());
         assert_eq!(parse_shard("2/5"), Ok(Shard { index: 2, count: 5 }));
+    }
+
+    /// A row's clamp and preset replace the command line's, never repeat them (clap refuses an
+    /// option given twice).
+    #[test]
+    fn a_rows_clamp_and_preset_replace_the_command_lines() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let cli = Cli::try_parse_from(["rfta", "m.csv", "--clamp", "0.5", "--preset", "paper"])
+            .expect("options");
+        let row = row_args(None, Some("0.25".into()), Some("fast".into())).expect("row");
+        let mut args = cli.args.checks.to_args(row.clamp);
+        args.extend(cli.args.tuning.to_args(row.preset));
+        let count = |flag: &str| args.iter().filter(|a| *a == flag).count();
+        assert_eq!((count("--clamp"), count("--preset")), (1, 1));
+        assert!(args.windows(2).any(|w| w == ["--clamp", "0.25"]));
+        assert!(args.windows(2).any(|w| w == ["--preset", "fast"]));
+        // Without row values, the command line's.
+        let args = cli.args.checks.to_args(None);
+        assert!(args.windows(2).any(|w| w == ["--clamp", "0.5"]));
     }
 
     #[test]

@@ -41,6 +41,21 @@ pub(crate) struct Args {
     /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
     #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = parse_bounds)]
     bounds: Option<rfta_io::GridBounds>,
+    #[command(flatten)]
+    pub(crate) checks: Checks,
+    /// Also write the final tangency points with their normals (PLY), e.g. for `rfta psr`.
+    #[arg(long, value_name = "PLY")]
+    points: Option<PathBuf>,
+    /// Also write the report's key figures as JSON (counts, agreement with the samples, seconds).
+    #[arg(long, value_name = "JSON")]
+    report: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) tuning: Tuning,
+}
+
+/// How the input is taken: shared by `reconstruct` and `batch`.
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct Checks {
     /// The SDF was clamped at this magnitude (samples at or beyond it get no tangency point).
     /// Without it a clamp is detected from flat plateaus of the values (see --no-check).
     #[arg(long)]
@@ -54,14 +69,24 @@ pub(crate) struct Args {
     /// memory available now).
     #[arg(long, value_name = "SIZE", value_parser = crate::ui::parse_size)]
     max_memory: Option<u64>,
-    /// Also write the final tangency points with their normals (PLY), e.g. for `rfta psr`.
-    #[arg(long, value_name = "PLY")]
-    points: Option<PathBuf>,
-    /// Also write the report's key figures as JSON (counts, agreement with the samples, seconds).
-    #[arg(long, value_name = "JSON")]
-    report: Option<PathBuf>,
-    #[command(flatten)]
-    pub(crate) tuning: Tuning,
+}
+
+impl Checks {
+    /// These options as `reconstruct` arguments (what `batch` passes to each row), with `clamp`
+    /// in place of `--clamp` where given.
+    pub(crate) fn to_args(&self, clamp: Option<f64>) -> Vec<String> {
+        let mut a = Vec::new();
+        if let Some(c) = clamp.or(self.clamp) {
+            a.extend(["--clamp".into(), c.to_string()]);
+        }
+        if self.no_check {
+            a.push("--no-check".into());
+        }
+        if let Some(m) = self.max_memory {
+            a.extend(["--max-memory".into(), format!("{m}B")]);
+        }
+        a
+    }
 }
 
 /// Options shared by `reconstruct` and `demo`.
@@ -267,16 +292,16 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         crate::ui::check_output(p)?;
     }
     let mut params = args.tuning.params();
-    params.clamp = args.clamp;
-    params.check = !args.no_check;
-    params.memory_limit = args.max_memory.or_else(crate::ui::available_memory);
+    params.clamp = args.checks.clamp;
+    params.check = !args.checks.no_check;
+    params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
     // Refuse an oversized grid from its header, before reading the data.
     if let Some(n) = rfta_io::peek_sdf_len(&args.input)? {
         rfta::check_memory(n, &params).with_context(|| {
             format!(
                 "{}: refused before reading (the limit is {})",
                 args.input.display(),
-                if args.max_memory.is_some() {
+                if args.checks.max_memory.is_some() {
                     "--max-memory"
                 } else {
                     "the memory available now"
