@@ -45,9 +45,11 @@ pub(crate) fn finish(
     if let Some(all) = rounds.all {
         let _ = tree.set(all);
     }
-    let (kept, removed) = remove_islands(&mesh, |faces, bounds| {
-        judge(unit, params, &tree, &mesh, faces, bounds)
-    });
+    let (kept, removed) = remove_islands(
+        &mesh,
+        |faces| inverted_and_unenclosed(&mesh, faces),
+        |faces, bounds| judge(unit, params, &tree, &mesh, faces, bounds),
+    );
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
@@ -195,8 +197,42 @@ enum Island {
     Small,
     /// The samples contradict it: every vertex lies inside a sample sphere, or it is at most
     /// [`UNSUPPORTED_BELOW`] spacings across and encloses no sample of the sign its orientation
-    /// gives its inside.
+    /// gives its inside; or it faces inward with no other component around it.
     Unsupported,
+}
+
+/// Whether the component `faces` of `mesh` faces inward (negative volume) and no other component
+/// encloses it: a cavity with no solid around it, which no bounded set of samples describes. With
+/// few samples away from the surface, screened Poisson can close such a shell far out in its box.
+fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
+    let corners = |f: usize| mesh.faces[f].map(|v| mesh.vertices[v as usize]);
+    let volume: f64 = faces
+        .iter()
+        .map(|&f| {
+            let [a, b, c] = corners(f);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
+    if volume >= 0.0 {
+        return false;
+    }
+    let Some(&first) = faces.first() else {
+        return false;
+    };
+    let p = mesh.vertices[mesh.faces[first][0] as usize];
+    let mut own = vec![false; mesh.faces.len()];
+    for &f in faces {
+        own[f] = true;
+    }
+    let winding: f64 = (0..mesh.faces.len())
+        .filter(|&f| !own[f])
+        .map(|f| {
+            let [a, b, c] = corners(f);
+            solid_angle(p, a, b, c)
+        })
+        .sum::<f64>()
+        / (4.0 * std::f64::consts::PI);
+    winding < 0.5
 }
 
 /// Components at most this many sample spacings across must enclose a sample to stay.
@@ -256,11 +292,13 @@ fn judge(
     None
 }
 
-/// Removes the connected components (by shared vertices) other than the largest (by faces) that
+/// Removes the connected components (by shared vertices) that `unsupported` condemns (given their
+/// faces; unless it condemns all), then those other than the largest remaining (by faces) that
 /// `verdict` condemns, given their faces and bounding box; unused vertices are dropped. Returns
-/// the mesh and the number removed for each [`Island`] reason.
+/// the mesh and the number removed for each [`Island`] reason (`unsupported`: unsupported).
 fn remove_islands(
     mesh: &TriMesh,
+    unsupported: impl Fn(&[usize]) -> bool,
     verdict: impl Fn(&[usize], Aabb) -> Option<Island>,
 ) -> (TriMesh, [usize; 2]) {
     let n = mesh.vertices.len();
@@ -302,11 +340,20 @@ fn remove_islands(
     if faces_of.len() < 2 {
         return (mesh.clone(), removed);
     }
+    let mut out: Vec<bool> = faces_of.iter().map(|f| unsupported(f)).collect();
+    if out.iter().all(|&o| o) {
+        out.fill(false);
+    }
     let largest = (0..faces_of.len())
+        .filter(|&c| !out[c])
         .max_by_key(|&c| (faces_of[c].len(), std::cmp::Reverse(c)))
         .unwrap_or(0);
     let keep: Vec<bool> = (0..faces_of.len())
         .map(|c| {
+            if out[c] {
+                removed[Island::Unsupported as usize] += 1;
+                return false;
+            }
             if c == largest {
                 return true;
             }
@@ -419,7 +466,7 @@ mod tests {
                 None
             }
         };
-        let (kept, removed) = remove_islands(&mesh, verdict);
+        let (kept, removed) = remove_islands(&mesh, |_| false, verdict);
         assert_eq!(removed, [1, 1]);
         let expect = union(&[main, free]);
         assert_eq!(kept.faces.len(), expect.faces.len());
@@ -432,10 +479,41 @@ mod tests {
         );
         // The largest component is never judged; an empty mesh is returned as it is.
         let tiny = ball(DVec3::ZERO, 0.01);
-        let (all, removed) = remove_islands(&tiny, |_, _| Some(Island::Small));
+        let (all, removed) = remove_islands(&tiny, |_| false, |_, _| Some(Island::Small));
         assert!(all == tiny && removed == [0, 0]);
-        let (empty, removed) = remove_islands(&TriMesh::default(), |_, _| Some(Island::Small));
+        let (empty, removed) =
+            remove_islands(&TriMesh::default(), |_| false, |_, _| Some(Island::Small));
         assert!(empty.faces.is_empty() && removed == [0, 0]);
+    }
+
+    /// An inward-facing component goes, even the largest, unless another encloses it (a cavity);
+    /// nothing goes when every component would.
+    #[test]
+    fn an_inverted_shell_goes_and_a_cavity_stays() {
+        let inner = ball(DVec3::ZERO, 0.5);
+        let mut shell = ball(DVec3::ZERO, 3.0);
+        for f in &mut shell.faces {
+            f.swap(1, 2);
+        }
+        let mesh = union(&[inner.clone(), shell.clone()]);
+        let (kept, removed) = remove_islands(
+            &mesh,
+            |faces| inverted_and_unenclosed(&mesh, faces),
+            |_, _| None,
+        );
+        assert_eq!(removed, [0, 1]);
+        assert_eq!(kept.faces.len(), inner.faces.len());
+        assert!(kept.vertices.iter().all(|v| v.length() < 0.51));
+        // Inside a solid ball of radius 4, the inverted shell is a cavity and stays.
+        let outer = ball(DVec3::ZERO, 4.0);
+        let hollow = union(&[outer, shell, inner]);
+        let (kept, removed) = remove_islands(
+            &hollow,
+            |faces| inverted_and_unenclosed(&hollow, faces),
+            |_, _| None,
+        );
+        assert_eq!(removed, [0, 0]);
+        assert_eq!(kept.faces.len(), hollow.faces.len());
     }
 
     /// The verdict on a small closed component, against grids whose samples describe it or not:
