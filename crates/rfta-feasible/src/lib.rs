@@ -59,8 +59,9 @@ pub struct Params {
     pub tau: f64,
     /// Maximum points per sphere (3; the paper's Table 2 used 30).
     pub n_max: usize,
-    /// Spheres at least this large get no point: those of a clamped SDF, and any the caller
-    /// keeps as constraints only (the pipeline's owner band); `+inf` for none.
+    /// Spheres at least this large (as given, before [`Params::owner_scale`]) get no point: those
+    /// of a clamped SDF, and any the caller keeps as constraints only (the pipeline's owner band);
+    /// `+inf` for none.
     pub owner_radius: f64,
     /// A cut is severe when the mesh comes within `severe * r` of the centre (0.8).
     pub severe: f64,
@@ -367,7 +368,8 @@ pub fn initial_points_counted(
         .map(|&i| {
             let s = params.owner(spheres[i as usize]);
             let v = values[i as usize];
-            if s.radius >= params.owner_radius || s.radius <= 0.0 {
+            // Owners are chosen by their radius as constraints, the caller's measure.
+            if spheres[i as usize].radius >= params.owner_radius || s.radius <= 0.0 {
                 return Vec::new();
             }
             let nn = kd
@@ -455,7 +457,7 @@ pub fn fine_tune_counted(
             let s = params.owner(spheres[i as usize]);
             let v = values[i as usize];
             let r = s.radius;
-            if r >= params.owner_radius || r <= 0.0 {
+            if spheres[i as usize].radius >= params.owner_radius || r <= 0.0 {
                 return Vec::new();
             }
             let cp = index.closest_point(s.center);

@@ -253,15 +253,15 @@ pub(crate) fn describe(samples: &SdfSamples, i: usize) -> String {
 /// Noise up to this fraction of the values is rounding: the spheres keep their radii.
 pub const NOISE_FLOOR: f64 = 0.001;
 
-/// Runs [`inspect`] and applies [`Params::check`]'s policy. Values that overlap the other sign's
-/// by a ratio `q` (short of [`SEVERE_RATIO`]), or that change faster than a
-/// distance by a fraction `e` of their magnitude ([`Inspection::lipschitz_excess`]), are taken as
-/// noise of up to `n = max(q - 1, e)` of the value, above [`NOISE_FLOOR`]: a sample's own tangency points stay on its
-/// sphere of radius `|s|`, but as a constraint on the others' points its sphere is shrunk by
-/// `1 / (1 + n)^2`
-/// ([`Report::radius_scale`]), the most an inflated neighbour can exceed a deflated sphere. With
-/// 1% noise on a 21^3 grid, without it, most spheres near the surface lost every point to
-/// neighbours inflated by the noise.
+/// Runs [`inspect`] and applies [`Params::check`]'s policy.
+///
+/// Values that overlap the other sign's by a ratio `q` (short of [`SEVERE_RATIO`]), or that change
+/// faster than a distance by a fraction `e` of their magnitude
+/// ([`Inspection::lipschitz_excess`]), are taken as noise of up to `n = max(q - 1, e)` of the
+/// value when `n` exceeds [`NOISE_FLOOR`]: a sample's own tangency points stay on its sphere of
+/// radius `|s|`, but as a constraint on the others' points its sphere shrinks by `1 / (1 + n)^2`
+/// ([`Report::radius_scale`]), the most an inflated neighbour can exceed a deflated sphere.
+/// Without it, 1% noise on a 21^3 grid cost most spheres near the surface every point.
 pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report) -> Result<()> {
     let found = inspect(samples);
     report.inconsistent_samples = found.inconsistent;

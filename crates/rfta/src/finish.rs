@@ -205,11 +205,11 @@ enum Island {
 /// encloses it: a cavity with no solid around it, which no bounded set of samples describes. With
 /// few samples away from the surface, screened Poisson can close such a shell far out in its box.
 fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
-    let corners = |f: usize| mesh.faces[f].map(|v| mesh.vertices[v as usize]);
+    // The divergence theorem over the component's faces (`TriMesh::signed_volume` of a part).
     let volume: f64 = faces
         .iter()
         .map(|&f| {
-            let [a, b, c] = corners(f);
+            let [a, b, c] = mesh.triangle(f);
             a.dot(b.cross(c)) / 6.0
         })
         .sum();
@@ -227,7 +227,7 @@ fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
     let winding: f64 = (0..mesh.faces.len())
         .filter(|&f| !own[f])
         .map(|f| {
-            let [a, b, c] = corners(f);
+            let [a, b, c] = mesh.triangle(f);
             solid_angle(p, a, b, c)
         })
         .sum::<f64>()

@@ -15,7 +15,7 @@ pub(crate) struct UnitBox {
     pub(crate) centers: Vec<DVec3>,
     /// Signed values, scaled.
     pub(crate) values: Vec<f64>,
-    /// Spheres of radius `min(radius_scale |s|, clamp)`.
+    /// Spheres of radius `radius_scale |s|`, or the clamp for clamped samples (`|s| >= clamp`).
     pub(crate) spheres: Vec<Sphere>,
     /// The clamp, scaled (`+inf` when none).
     pub(crate) clamp: f64,
@@ -42,10 +42,20 @@ impl UnitBox {
         let values: Vec<f64> = samples.values().iter().map(|&s| s / scale).collect();
         let cap = clamp.map_or(f64::INFINITY, |c| c / scale);
         let shrink = radius_scale.unwrap_or(1.0);
+        // A clamped sample keeps the clamp as its radius (it owns no point); the others shrink.
         let spheres = centers
             .iter()
             .zip(&values)
-            .map(|(&c, &s)| Sphere::new(c, (shrink * s.abs()).min(cap)))
+            .map(|(&c, &s)| {
+                Sphere::new(
+                    c,
+                    if s.abs() >= cap {
+                        cap
+                    } else {
+                        shrink * s.abs()
+                    },
+                )
+            })
             .collect();
         Self {
             trans,

@@ -529,6 +529,29 @@ fn noisy_values_keep_their_tangency_points() {
         "{} of {owners}",
         blind.report.spheres_without_point
     );
+    // Clamped as well (at 0.2, given): the clamped samples still own no point, though the noise
+    // shrinks every other sphere.
+    let clamp = 0.2;
+    let clamped: Vec<f64> = samples
+        .values()
+        .iter()
+        .map(|&s| s.signum() * s.abs().min(clamp))
+        .collect();
+    let both = SdfSamples::grid(grid, clamped.clone()).expect("samples");
+    let given = Params {
+        clamp: Some(clamp),
+        ..Params::fast()
+    };
+    let out_both = reconstruct(&both, &given).expect("noisy and clamped");
+    assert!(out_both.report.radius_scale.is_some());
+    assert!(
+        out_both
+            .points
+            .owners
+            .iter()
+            .all(|&o| clamped[o as usize].abs() < clamp),
+        "a clamped sample owns a point"
+    );
     // Vertices within a tenth of the spacing (0.1) of the torus on average, as the clean grid's.
     let err = |m: &rfta::geom::TriMesh| {
         m.vertices.iter().map(|&v| torus.sdf(v).abs()).sum::<f64>() / m.vertices.len() as f64
