@@ -7,7 +7,7 @@
 //! shard loses only the rows it was running; a rerun skips the rows whose status says `ok` (or
 //! `skipped`) and whose output exists, and runs the others again.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
@@ -252,13 +252,13 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
     // them only, then this run's rows appended as they finish.
     let done = earlier_rows(&status_path, base)?;
     let mut status = StatusFile::create(&status_path, &done)?;
+    let finished: HashSet<(usize, &str, &str)> = done
+        .iter()
+        .map(|d| (d.row, d.input.as_str(), d.output.as_str()))
+        .collect();
     let todo: Vec<&Job> = jobs
         .iter()
-        .filter(|j| {
-            !done
-                .iter()
-                .any(|d| d.row == j.row && d.input == j.input && d.output == j.output)
-        })
+        .filter(|j| !finished.contains(&(j.row, j.input.as_str(), j.output.as_str())))
         .collect();
     let cores = threads.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
@@ -335,12 +335,7 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
                 next.store(todo.len(), Ordering::Relaxed);
                 write_error.get_or_insert(e);
             }
-            let failed: usize = Status::ALL
-                .iter()
-                .filter(|s| s.is_failure())
-                .filter_map(|s| counts.get(s))
-                .sum();
-            bar.set_message(format!("{failed} failed"));
+            bar.set_message(format!("{} failed", failures(&counts)));
             bar.inc(1);
         }
     });
@@ -361,16 +356,20 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
             .join(", "),
         status_path.display()
     );
-    let failed: usize = Status::ALL
-        .iter()
-        .filter(|s| s.is_failure())
-        .filter_map(|s| counts.get(s))
-        .sum();
-    if failed > 0 {
+    if failures(&counts) > 0 {
         return Err(Exit::some_failed(summary).into());
     }
     ui.say(summary);
     Ok(())
+}
+
+/// Rows that failed or timed out.
+fn failures(counts: &HashMap<Status, usize>) -> usize {
+    Status::ALL
+        .iter()
+        .filter(|s| s.is_failure())
+        .filter_map(|s| counts.get(s))
+        .sum()
 }
 
 /// Runs rows as child processes.
@@ -472,13 +471,11 @@ impl Runner {
             .to_string();
         let result = match ended {
             Ended::TimedOut(after) => {
-                // A killed writer may leave its temporary file (never the output).
-                if let (Some(dir), Some(name)) = (output.parent(), output.file_name()) {
-                    let _ = std::fs::remove_file(dir.join(format!(
-                        ".{}.{}.tmp",
-                        name.to_string_lossy(),
-                        child.id()
-                    )));
+                // A killed writer may leave its temporary files (never the outputs).
+                for written in [&output, &report] {
+                    if let Some(tmp) = rfta_io::temp_path(written, child.id()) {
+                        let _ = std::fs::remove_file(tmp);
+                    }
                 }
                 (
                     Status::Timeout,
@@ -730,12 +727,8 @@ fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
 /// The rows of an earlier run that need not run again: the last word on each row is `ok` or
 /// `skipped` and its output exists. Returned as `skipped`.
 fn earlier_rows(path: &Path, base: &Path) -> Result<Vec<StatusRow>> {
-    let mut last: HashMap<usize, StatusRow> = HashMap::new();
-    for r in read_status(path)? {
-        last.insert(r.row, r);
-    }
-    let mut done: Vec<StatusRow> = last
-        .into_values()
+    Ok(last_by_row(read_status(path)?)
+        .into_iter()
         .filter(|r| matches!(r.status, Status::Ok | Status::Skipped))
         .filter(|r| base.join(&r.output).is_file())
         .map(|mut r| {
@@ -745,9 +738,18 @@ fn earlier_rows(path: &Path, base: &Path) -> Result<Vec<StatusRow>> {
             }
             r
         })
-        .collect();
-    done.sort_by_key(|r| r.row);
-    Ok(done)
+        .collect())
+}
+
+/// The last record of each row (a rerun appends after the row it redoes), in manifest order.
+fn last_by_row(rows: Vec<StatusRow>) -> Vec<StatusRow> {
+    let mut last: HashMap<usize, StatusRow> = HashMap::new();
+    for r in rows {
+        last.insert(r.row, r);
+    }
+    let mut rows: Vec<StatusRow> = last.into_values().collect();
+    rows.sort_by_key(|r| r.row);
+    rows
 }
 
 /// A status file written a row at a time.
@@ -781,20 +783,14 @@ impl StatusFile {
 
 /// `--merge`: the rows of every status file, in manifest order, with totals.
 fn merge(paths: &[PathBuf], out: Option<&Path>) -> Result<()> {
-    let mut rows: Vec<StatusRow> = Vec::new();
+    let mut all: Vec<StatusRow> = Vec::new();
     for p in paths {
-        rows.extend(read_status(p)?);
         if !p.is_file() {
             bail!("{}: no such status file", p.display());
         }
+        all.extend(read_status(p)?);
     }
-    // The last word on a row wins (a rerun appends after the row it redoes).
-    let mut last: HashMap<usize, StatusRow> = HashMap::new();
-    for r in rows {
-        last.insert(r.row, r);
-    }
-    let mut rows: Vec<StatusRow> = last.into_values().collect();
-    rows.sort_by_key(|r| r.row);
+    let rows = last_by_row(all);
     let out = out.map_or_else(
         || {
             paths[0]
@@ -895,6 +891,68 @@ mod tests {
         // Without row values, the command line's.
         let args = cli.args.checks.to_args(None);
         assert!(args.windows(2).any(|w| w == ["--clamp", "0.5"]));
+    }
+
+    /// Every `reconstruct` option of `Checks` and `Tuning` reaches the rows: set them all on
+    /// the command line and `to_args` gives each back (an option added to either and forgotten in
+    /// its `to_args` fails here).
+    #[test]
+    fn every_reconstruct_option_reaches_the_rows() {
+        use clap::{Args as _, Parser};
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let cli = Cli::try_parse_from([
+            "rfta",
+            "m.csv",
+            "--clamp",
+            "0.5",
+            "--no-check",
+            "--max-memory",
+            "2G",
+            "--preset",
+            "paper",
+            "--iters",
+            "4",
+            "--max-points",
+            "5",
+            "--seed",
+            "9",
+            "--gpu",
+            "on",
+            "--min-island",
+            "0.25",
+            "--owner-band",
+            "2",
+            "--raster-res",
+            "64",
+            "--depth",
+            "7",
+        ])
+        .expect("options");
+        let mut given: Vec<String> = cli.args.checks.to_args(None);
+        given.extend(cli.args.tuning.to_args(None));
+        let flags: std::collections::BTreeSet<String> = given
+            .iter()
+            .filter_map(|a| a.strip_prefix("--"))
+            .map(String::from)
+            .collect();
+        let declared = Tuning::augment_args(Checks::augment_args(clap::Command::new("t")));
+        let all: std::collections::BTreeSet<String> = declared
+            .get_arguments()
+            .filter_map(|a| a.get_long().map(String::from))
+            .collect();
+        assert_eq!(flags, all);
+        // And the values are the ones given.
+        for pair in [
+            ["--iters", "4"],
+            ["--preset", "paper"],
+            ["--max-memory", "2147483648B"],
+        ] {
+            assert!(given.windows(2).any(|w| w == pair), "{pair:?} in {given:?}");
+        }
     }
 
     #[test]

@@ -6,6 +6,20 @@ use std::path::Path;
 
 use crate::{Error, Result};
 
+/// The temporary file process `pid` writes `path` through ([`write_atomic`]): beside it, named
+/// `.NAME.PID.tmp`. A process killed mid-write leaves it; whoever killed it can remove it.
+pub fn temp_path(path: &Path, pid: u32) -> Option<std::path::PathBuf> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Some(dir.join(temp_name(path.file_name()?, pid)))
+}
+
+fn temp_name(name: &std::ffi::OsStr, pid: u32) -> String {
+    format!(".{}.{pid}.tmp", name.to_string_lossy())
+}
+
 /// Writes `path` atomically: `write` fills a temporary file in the same directory, which is
 /// flushed, synced and renamed over `path`. On any error the temporary file is removed and
 /// `path` is left as it was.
@@ -30,11 +44,7 @@ pub fn write_atomic(
             "the output path has no file name",
         ))
     })?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let tmp = dir.join(temp_name(name, std::process::id()));
     let result = (|| {
         let file = File::create(&tmp)?;
         let mut out = BufWriter::new(file);

@@ -45,7 +45,7 @@ mod sdf;
 mod stl;
 mod text;
 
-pub use atomic::write_atomic;
+pub use atomic::{temp_path, write_atomic};
 pub use error::{Error, Result};
 pub use npy::{NpyArray, parse_npy, write_npy_f64};
 pub use sdf::{
