@@ -290,6 +290,38 @@ fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, [f64; 3])
     best
 }
 
+/// Where the segment from `a` to `b` crosses the triangle `(p0, p1, p2)`: the parameter `t` in
+/// `[0, 1]` of the crossing point `a + t (b - a)`, or `None` when they do not meet.
+///
+/// The triangle includes its edges. A segment in the triangle's plane, or a degenerate triangle,
+/// counts as not crossing (there is no single crossing point). Moeller and Trumbore, "Fast,
+/// minimum storage ray-triangle intersection", Journal of Graphics Tools 2(1), 1997, with the
+/// ray's parameter limited to the segment.
+pub fn segment_triangle(a: DVec3, b: DVec3, p0: DVec3, p1: DVec3, p2: DVec3) -> Option<f64> {
+    let dir = b - a;
+    let (e1, e2) = (p1 - p0, p2 - p0);
+    let pv = dir.cross(e2);
+    let det = e1.dot(pv);
+    // Parallel to the plane (relative to the sizes involved), or a degenerate triangle.
+    let scale = dir.length() * e1.length() * e2.length();
+    if !(det.abs() > 1e-14 * scale) {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = a - p0;
+    let u = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = dir.dot(qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = e2.dot(qv) * inv;
+    (0.0..=1.0).contains(&t).then_some(t)
+}
+
 /// Signed solid angle subtended at `p` by triangle `(a, b, c)`, in steradians (in `[-2pi, 2pi]`).
 ///
 /// Positive when the triangle is seen counter-clockwise, i.e. `p` is on the side its normal

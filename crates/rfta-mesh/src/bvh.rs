@@ -221,6 +221,52 @@ impl MeshIndex {
         best
     }
 
+    /// Whether the segment from `a` to `b` crosses the mesh (a triangle, its edges included; see
+    /// [`kernels::segment_triangle`]): a collision query, as a moving point's path from one time
+    /// step to the next.
+    pub fn segment_hits(&self, a: DVec3, b: DVec3) -> bool {
+        let dir = b - a;
+        // Slab test of the segment against a box, with the reciprocal direction precomputed.
+        let inv = DVec3::ONE / dir;
+        let crosses = |bounds: &Aabb| {
+            let (mut near, mut far) = (0.0_f64, 1.0_f64);
+            for k in 0..3 {
+                if dir[k] == 0.0 {
+                    if a[k] < bounds.min[k] || a[k] > bounds.max[k] {
+                        return false;
+                    }
+                } else {
+                    let t0 = (bounds.min[k] - a[k]) * inv[k];
+                    let t1 = (bounds.max[k] - a[k]) * inv[k];
+                    near = near.max(t0.min(t1));
+                    far = far.min(t0.max(t1));
+                }
+            }
+            near <= far
+        };
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        while let Some(idx) = stack.pop() {
+            let node = &self.nodes[idx as usize];
+            if !crosses(&node.bounds) {
+                continue;
+            }
+            if node.leaf {
+                let hit = (node.a..node.a + node.b).any(|t| {
+                    let [p0, p1, p2] = self.tris[t as usize];
+                    kernels::segment_triangle(a, b, p0, p1, p2).is_some()
+                });
+                if hit {
+                    return true;
+                }
+            } else {
+                stack.push(node.a);
+                stack.push(node.b);
+            }
+        }
+        false
+    }
+
     /// Distance from `p` to the mesh.
     pub fn unsigned_distance(&self, p: DVec3) -> f64 {
         self.closest_point(p).distance_squared.sqrt()

@@ -203,6 +203,30 @@ proptest! {
             prop_assert!((index.closest_point(p).distance_squared - brute).abs() <= 1e-15 * brute.max(1e-300));
         }
     }
+
+    #[test]
+    fn segment_hits_equal_brute_force_on_random_soups(seed in 0u64..10_000, n in 1usize..60) {
+        let mut rng = Rng::new(seed);
+        let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let vertices: Vec<DVec3> = (0..3 * n).map(|_| r()).collect();
+        let faces = (0..n as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let mesh = TriMesh::new(vertices, faces).expect("valid");
+        let index = MeshIndex::new(&mesh).expect("non-empty");
+        let mut hits = 0;
+        for i in 0..40 {
+            let a = r() * 3.0 - DVec3::ONE;
+            // Some segments run along an axis, where the box test divides by zero.
+            let b = if i % 4 == 0 { a + DVec3::X * (r().x - 0.5) * 2.0 } else { r() * 3.0 - DVec3::ONE };
+            let brute = mesh.faces.iter().any(|&[i, j, k]| {
+                let v = &mesh.vertices;
+                kernels::segment_triangle(a, b, v[i as usize], v[j as usize], v[k as usize]).is_some()
+            });
+            prop_assert_eq!(index.segment_hits(a, b), brute);
+            hits += usize::from(brute);
+        }
+        // The soups are dense enough that the test exercises hits as well as misses.
+        prop_assert!(n < 20 || hits > 0);
+    }
 }
 
 #[test]
@@ -233,4 +257,17 @@ fn winding_number_near_one_half_is_refined_on_open_meshes() {
         n_ambiguous > 10,
         "the test must exercise the refinement ({n_ambiguous} points)"
     );
+}
+
+#[test]
+fn segments_through_a_sphere_hit_it_and_segments_beside_or_inside_do_not() {
+    let index = MeshIndex::new(&shapes::icosphere(1.0, 3)).expect("non-empty");
+    // Through the centre, from outside to outside: two crossings.
+    assert!(index.segment_hits(DVec3::new(-2.0, 0.1, 0.2), DVec3::new(2.0, 0.1, 0.2)));
+    // From the centre out: one crossing.
+    assert!(index.segment_hits(DVec3::ZERO, DVec3::new(0.3, 1.5, 0.2)));
+    // Wholly inside, wholly outside and beside.
+    assert!(!index.segment_hits(DVec3::new(-0.5, 0.0, 0.0), DVec3::new(0.5, 0.1, 0.0)));
+    assert!(!index.segment_hits(DVec3::new(1.5, 1.5, 0.0), DVec3::new(1.5, -1.5, 0.0)));
+    assert!(!index.segment_hits(DVec3::new(2.0, 0.0, 0.0), DVec3::new(1.2, 0.0, 0.0)));
 }

@@ -116,6 +116,30 @@ proptest! {
     }
 
     #[test]
+    fn segment_triangle_agrees_with_orientation_predicates(
+        a in vec3(2.0), b in vec3(2.0), p0 in vec3(1.0), p1 in vec3(1.0), p2 in vec3(1.0)
+    ) {
+        // The segment crosses the triangle when its ends lie on opposite sides of the
+        // triangle's plane and the three tetrahedra it forms with the edges agree in sign.
+        let orient = |p: DVec3, q: DVec3, r: DVec3, s: DVec3| (q - p).cross(r - p).dot(s - p);
+        let (sa, sb) = (orient(p0, p1, p2, a), orient(p0, p1, p2, b));
+        let edges = [orient(a, b, p0, p1), orient(a, b, p1, p2), orient(a, b, p2, p0)];
+        // Skip configurations within rounding of a boundary, where either answer is right.
+        let tiny = 1e-9;
+        prop_assume!(sa.abs() > tiny && sb.abs() > tiny && edges.iter().all(|e| e.abs() > tiny));
+        let crosses = (sa > 0.0) != (sb > 0.0)
+            && (edges.iter().all(|&e| e > 0.0) || edges.iter().all(|&e| e < 0.0));
+        let hit = segment_triangle(a, b, p0, p1, p2);
+        prop_assert_eq!(hit.is_some(), crosses);
+        if let Some(t) = hit {
+            // The crossing point lies in the triangle's plane.
+            let x = a + t * (b - a);
+            let n = (p1 - p0).cross(p2 - p0).normalize();
+            prop_assert!((x - p0).dot(n).abs() < 1e-9);
+        }
+    }
+
+    #[test]
     fn closest_point_on_triangle_beats_brute_force(
         p in vec3(3.0), a in vec3(1.0), b in vec3(1.0), c in vec3(1.0)
     ) {
