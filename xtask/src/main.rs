@@ -29,7 +29,7 @@ cargo xtask <command>
 
 commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --scenario noise,clamp,scattered,params --quick
+            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --scenario noise,clamp,scattered,swept,collision,params --quick
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
@@ -37,8 +37,10 @@ commands:
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
             chamfer.svg, contact_sheet.png); --depth and --owner-band override the rfta methods'
             Poisson depth and owner band (0: every sphere owns points)
-            --scenario noise,clamp,scattered,params [--levels L,..]: the paper's Figures 23 (relative noise,
-            levels 0.005,0.01,0.02,0.05), 24 (clamps at 4,2,1 spacings, given and detected), 11-13
+            --scenario noise,clamp,scattered,swept,collision,params [--levels L,..]: the paper's
+            Figures 23 (relative noise, levels 0.005,0.01,0.02,0.05), 24 (clamps at 4,2,1 spacings,
+            given and detected), 25 (swept volumes' pseudo-SDFs, sweep lengths 0,0.3,0.6), 22
+            (collision: segments of length 0.05,0.2,0.8, false negatives and positives), 11-13
             (params = raster,batch,rounds swept on two shapes), and scattered samples (uniform and
             near-surface, as many as the grid's), rfta against marching cubes on the changed and the
             clean grid, into <out>/<scenario>/
@@ -181,12 +183,12 @@ fn ci(root: &Path) -> Result<()> {
             root.join("target/eval/ci-quick").display().to_string(),
         ],
     )?;
-    println!("==> eval --scenario noise,clamp,scattered,params --quick");
+    println!("==> eval --scenario noise,clamp,scattered,swept,collision,params --quick");
     eval::run(
         root,
         &[
             "--scenario".to_string(),
-            "noise,clamp,scattered,params".to_string(),
+            "noise,clamp,scattered,swept,collision,params".to_string(),
             "--quick".to_string(),
             "--out".to_string(),
             root.join("target/eval/ci-scenarios").display().to_string(),

@@ -304,7 +304,8 @@ pub fn segment_triangle(a: DVec3, b: DVec3, p0: DVec3, p1: DVec3, p2: DVec3) -> 
     let det = e1.dot(pv);
     // Parallel to the plane (relative to the sizes involved), or a degenerate triangle.
     let scale = dir.length() * e1.length() * e2.length();
-    if !(det.abs() > 1e-14 * scale) {
+    // (Written so that a NaN determinant also returns.)
+    if det.abs().partial_cmp(&(1e-14 * scale)) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let inv = 1.0 / det;

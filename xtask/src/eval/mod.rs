@@ -5,12 +5,12 @@
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
 //!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
 //!                  [--out DIR]
-//! cargo xtask eval --scenario noise,clamp,scattered,params [--levels L,..] [--inputs DIR] [--quick]
+//! cargo xtask eval --scenario noise,clamp,scattered,swept,collision,params [--levels L,..] [--inputs DIR] [--quick]
 //! ```
 //!
-//! `--scenario` runs the paper's Figures 23 (noise), 24 (clamp) and 11 to 13 (`params`: raster,
-//! batch, rounds), and scattered samples (`scattered`), instead of Table 2, each into
-//! `<out>/<scenario>/` ([`scenario`]).
+//! `--scenario` runs the paper's Figures 23 (noise), 24 (clamp), 25 (`swept`), 22 (`collision`)
+//! and 11 to 13 (`params`: raster, batch, rounds), and scattered samples (`scattered`), instead of
+//! Table 2, each into `<out>/<scenario>/` ([`scenario`]).
 //!
 //! `--depth D` runs every rfta method's screened Poisson solves at octree depth `D` instead of the
 //! depth matched to the sample spacing, and `--owner-band K` gives points to the spheres within
@@ -25,6 +25,7 @@
 mod render;
 mod report;
 mod scenario;
+mod swept;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

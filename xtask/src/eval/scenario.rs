@@ -11,6 +11,10 @@
 //! - `scattered`: as many samples as each grid has, uniform in its box or near the surface as
 //!   DeepSDF draws them, at exact signed distances; the default preset on them against the grid of
 //!   the same count (rfta and marching cubes).
+//! - `swept` (Figure 25): the pseudo-SDF of each shape swept along a motion of each length
+//!   ([`super::swept`]), scored against the zero set of the same function.
+//! - `collision` (Figure 22): random segments (projectiles) of each length tested against the
+//!   ground truth and against each method's mesh: false negatives and false positives.
 //!
 //! Marching cubes runs on the changed grid and on the clean one. Per row: Chamfer against the
 //! ground truth, CPU time, the spheres left without a tangency point, what the check measured
@@ -22,6 +26,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Grid, SdfSamples, TriMesh};
 use rfta_mesh::MeshIndex;
@@ -52,13 +57,19 @@ pub(crate) enum Scenario {
     Batch,
     /// Scattered samples (uniform, or near the surface as DeepSDF draws them) as many as a grid's.
     Scattered,
+    /// Figure 25: the pseudo-SDF of a swept volume.
+    Swept,
+    /// Figure 22: segments against the ground truth and the reconstructions.
+    Collision,
 }
 
 impl Scenario {
-    pub(crate) const ALL: [Scenario; 6] = [
+    pub(crate) const ALL: [Scenario; 8] = [
         Scenario::Noise,
         Scenario::Clamp,
         Scenario::Scattered,
+        Scenario::Swept,
+        Scenario::Collision,
         Scenario::Rounds,
         Scenario::Raster,
         Scenario::Batch,
@@ -75,14 +86,16 @@ impl Scenario {
             Scenario::Raster => "raster",
             Scenario::Batch => "batch",
             Scenario::Scattered => "scattered",
+            Scenario::Swept => "swept",
+            Scenario::Collision => "collision",
         }
     }
 
     /// The parameter sweeps run on two shapes (the paper's Figures 11 to 13 use a few).
     pub(crate) fn shapes(self) -> usize {
         match self {
-            Scenario::Noise | Scenario::Clamp | Scenario::Scattered => usize::MAX,
-            _ => 2,
+            Scenario::Rounds | Scenario::Raster | Scenario::Batch => 2,
+            _ => usize::MAX,
         }
     }
 
@@ -96,6 +109,10 @@ impl Scenario {
             // 0: every sphere in one batch.
             Scenario::Batch => vec![300.0, 1000.0, 3000.0, 10000.0, 0.0],
             Scenario::Scattered => vec![UNIFORM, NEAR_SURFACE],
+            // Sweep lengths (0: the shape standing still, its exact SDF).
+            Scenario::Swept => vec![0.0, 0.3, 0.6],
+            // Projectile lengths.
+            Scenario::Collision => vec![0.05, 0.2, 0.8],
         }
     }
 
@@ -108,6 +125,8 @@ impl Scenario {
             Scenario::Raster => vec![64.0, 128.0],
             Scenario::Batch => vec![1000.0, 0.0],
             Scenario::Scattered => vec![NEAR_SURFACE],
+            Scenario::Swept => vec![0.3],
+            Scenario::Collision => vec![0.2],
         }
     }
 
@@ -118,7 +137,11 @@ impl Scenario {
             Scenario::Clamp => None,
             // The default setting.
             Scenario::Rounds => Some(10.0),
-            Scenario::Raster | Scenario::Batch | Scenario::Scattered => None,
+            Scenario::Raster
+            | Scenario::Batch
+            | Scenario::Scattered
+            | Scenario::Swept
+            | Scenario::Collision => None,
         }
     }
 
@@ -150,6 +173,8 @@ impl Scenario {
             Scenario::Raster => "rasterization cells per axis",
             Scenario::Batch => "spheres per batch (last: all)",
             Scenario::Scattered => "sample distribution",
+            Scenario::Swept => "sweep length (and radians turned)",
+            Scenario::Collision => "projectile length",
         }
     }
 
@@ -161,6 +186,8 @@ impl Scenario {
             Scenario::Raster => "rasterization resolution (the paper's Figure 11)",
             Scenario::Batch => "batch size (the paper's Figure 12)",
             Scenario::Scattered => "scattered samples",
+            Scenario::Swept => "swept volumes (the paper's Figure 25)",
+            Scenario::Collision => "collision queries (the paper's Figure 22)",
         }
     }
 
@@ -180,6 +207,12 @@ impl Scenario {
             }
             Scenario::Scattered => {
                 "As many samples as the grid of each N has, at exact signed distances from the ground truth: uniform in the grid's box, or near the surface as DeepSDF draws them (scaled to the box side L: 5% uniform, the rest on the surface plus Gaussian offsets of 0.008 L for one half and 0.025 L for the other); `rfta-default` is the default preset on them (scattered samples: every sphere owns points), `rfta-grid` the default preset on the grid of the same count; marching cubes cannot run on scattered samples, so both mc columns are the grid's."
+            }
+            Scenario::Swept => {
+                "Each shape, scaled by 0.6 about its box's centre, moves by the level along x while turning the level in radians about z, sampled at copies no point of which moves more than 0.02 between two; the grid holds the least of the copies' exact signed distances (a pseudo-SDF: exact outside, a lower bound of the depth inside). The ground truth is the zero set of the same function, marching cubes on a 257^3 grid evaluated exactly near the surface; level 0 is the scaled shape standing still (an exact SDF). Both mc columns are marching cubes on the same grid."
+            }
+            Scenario::Collision => {
+                "20,000 segments of the level's length per shape (seeded; midpoints uniform in the ground truth's box grown by 0.1, directions uniform), each tested against the ground truth and against each method's mesh (`MeshIndex::segment_hits`): a false negative is a segment that hits the ground truth and misses the mesh (a projectile that passes through), a false positive one that misses the ground truth and hits the mesh; given as shares of the segments that hit, and that miss, the ground truth. The same segments at every N."
             }
             Scenario::Batch => {
                 "The default preset with `Params::batch_size` (the paper's b) set to each level on the clean grid (all: every sphere in every feasibility test); the default is 10^4, which holds all of a 21^3 or 31^3 grid."
@@ -207,9 +240,12 @@ impl Scenario {
                 .iter()
                 .map(|&s| s.signum() * s.abs().min(level * h))
                 .collect(),
-            Scenario::Rounds | Scenario::Raster | Scenario::Batch | Scenario::Scattered => {
-                clean.to_vec()
-            }
+            Scenario::Rounds
+            | Scenario::Raster
+            | Scenario::Batch
+            | Scenario::Scattered
+            | Scenario::Swept
+            | Scenario::Collision => clean.to_vec(),
         }
     }
 
@@ -234,7 +270,11 @@ impl Scenario {
                 batch_size: level as usize,
                 ..base
             },
-            Scenario::Noise | Scenario::Clamp | Scenario::Scattered => base,
+            Scenario::Noise
+            | Scenario::Clamp
+            | Scenario::Scattered
+            | Scenario::Swept
+            | Scenario::Collision => base,
         }
     }
 }
@@ -254,7 +294,87 @@ struct ScenarioRow {
     without_point: usize,
     /// What the check measured (see [`Scenario::explanation`]).
     measured: f64,
+    /// The collision scenario's counts.
+    collision: Option<Collisions>,
     status: String,
+}
+
+/// Segments against a ground truth and a mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Collisions {
+    segments: usize,
+    /// Segments that hit the ground truth.
+    gt_hits: usize,
+    /// Segments that hit the ground truth and miss the mesh.
+    false_negatives: usize,
+    /// Segments that miss the ground truth and hit the mesh.
+    false_positives: usize,
+}
+
+impl Collisions {
+    /// `segments` (with whether each hits the ground truth) against `mesh`.
+    fn count(segments: &[Segment], gt_hit: &[bool], mesh: &TriMesh) -> Result<Self> {
+        let hits: Vec<bool> = if mesh.is_empty() {
+            vec![false; segments.len()]
+        } else {
+            let index = MeshIndex::new(mesh)?;
+            segments
+                .par_iter()
+                .map(|&(a, b)| index.segment_hits(a, b))
+                .collect()
+        };
+        let both = |g: bool, m: bool| {
+            gt_hit
+                .iter()
+                .zip(&hits)
+                .filter(|&(&x, &y)| x == g && y == m)
+                .count()
+        };
+        Ok(Collisions {
+            segments: segments.len(),
+            gt_hits: gt_hit.iter().filter(|&&h| h).count(),
+            false_negatives: both(true, false),
+            false_positives: both(false, true),
+        })
+    }
+
+    fn false_negative_rate(&self) -> f64 {
+        self.false_negatives as f64 / self.gt_hits.max(1) as f64
+    }
+
+    fn false_positive_rate(&self) -> f64 {
+        self.false_positives as f64 / (self.segments - self.gt_hits).max(1) as f64
+    }
+
+    /// Share of all segments the mesh answers wrongly.
+    fn misclassified(&self) -> f64 {
+        (self.false_negatives + self.false_positives) as f64 / self.segments.max(1) as f64
+    }
+}
+
+/// A segment, from one end to the other.
+type Segment = (DVec3, DVec3);
+
+/// Segments per shape and length in the collision scenario.
+const COLLISION_SEGMENTS: usize = 20_000;
+
+/// `COLLISION_SEGMENTS` segments of length `length` with midpoints uniform in `bounds` grown by
+/// 0.1 and directions uniform on the sphere.
+fn projectiles(bounds: rfta_geom::Aabb, length: f64, seed: u64) -> Vec<Segment> {
+    let b = bounds.padded(0.1);
+    let mut rng = rfta_geom::rng::Rng::new(seed);
+    (0..COLLISION_SEGMENTS)
+        .map(|_| {
+            let mid = b.min
+                + (b.max - b.min) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            // Uniform direction: z uniform in [-1, 1], azimuth uniform.
+            let z = 2.0 * rng.next_f64() - 1.0;
+            let phi = std::f64::consts::TAU * rng.next_f64();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let half = 0.5 * length * DVec3::new(r * phi.cos(), r * phi.sin(), z);
+            (mid - half, mid + half)
+        })
+        .collect()
 }
 
 /// Runs `scenario` over `shapes` at resolutions `res` and `levels`, writing into `out`.
@@ -279,24 +399,49 @@ pub(crate) fn run(
     for (k, shape) in shapes.iter().enumerate() {
         let gt_index = MeshIndex::new(&shape.gt)
             .with_context(|| format!("{}: empty ground truth", shape.name))?;
-        let chamfer = |mesh: &TriMesh| -> Result<f64> {
-            if mesh.is_empty() {
-                return Ok(f64::NAN);
+        // What each level is scored against: the shape, or (swept) the zero set of the level's
+        // pseudo-SDF, with the sweep that makes the level's grids.
+        let mut sweeps = Vec::new();
+        let mut swept_gts = Vec::new();
+        if scenario == Scenario::Swept {
+            for &level in &levels {
+                bar.set_message(format!("{} swept {level}: ground truth", shape.name));
+                let sweep = super::swept::Sweep::new(&shape.gt, &gt_index, level);
+                let gt = sweep.ground_truth()?;
+                let index = MeshIndex::new(&gt)?;
+                sweeps.push(sweep);
+                swept_gts.push((gt, index));
             }
-            let index = MeshIndex::new(mesh)?;
-            Ok(rfta_metrics::chamfer_indexed(
-                (&shape.gt, &gt_index),
-                (mesh, &index),
-                samples,
-                1,
-            ))
+        }
+        let gt_of = |l: usize| match swept_gts.get(l) {
+            Some((gt, index)) => (gt, index),
+            None => (&shape.gt, &gt_index),
+        };
+        // The collision scenario's segments: the same at every N.
+        let segments: Vec<(Vec<Segment>, Vec<bool>)> = if scenario == Scenario::Collision {
+            levels
+                .iter()
+                .enumerate()
+                .map(|(l, &length)| {
+                    let seed = 0x636f_6c6c ^ ((k as u64) << 32) ^ l as u64;
+                    let segs = projectiles(gt_index.bounds(), length, seed);
+                    let hits = segs
+                        .par_iter()
+                        .map(|&(a, b)| gt_index.segment_hits(a, b))
+                        .collect();
+                    (segs, hits)
+                })
+                .collect()
+        } else {
+            Vec::new()
         };
         for &n in res {
             let (grid, clean) = super::grid_for(shape, &gt_index, n)?;
             let h = grid.spacing().max_element();
-            let clean_mc = chamfer(&rfta_mc::marching_cubes(&grid, &clean, 0.0))?;
-            // The scattered scenario's run on the grid itself is the same at every level.
-            let mut on_grid: Option<ScenarioRow> = None;
+            let clean_mc = rfta_mc::marching_cubes(&grid, &clean, 0.0);
+            // A run that is the same at every level (the scattered scenario's on the grid, the
+            // collision scenario's): done once per shape and N.
+            let mut once: Option<(ScenarioRow, TriMesh)> = None;
             for (l, &level) in levels.iter().enumerate() {
                 bar.set_message(format!(
                     "{} n={n} {} {}",
@@ -307,7 +452,18 @@ pub(crate) fn run(
                 let mut rng = rfta_geom::rng::Rng::new(
                     0x006e_6f69_7365 ^ ((k as u64) << 32) ^ ((n as u64) << 16) ^ l as u64,
                 );
-                let values = scenario.apply(&clean, level, h, &mut rng);
+                let values = match sweeps.get(l) {
+                    Some(sweep) => sweep.grid_values(&grid),
+                    None => scenario.apply(&clean, level, h, &mut rng),
+                };
+                let (gt, gt_idx) = gt_of(l);
+                let chamfer = |mesh: &TriMesh| score((gt, gt_idx), mesh, samples);
+                let collisions = |mesh: &TriMesh| -> Result<Option<Collisions>> {
+                    match segments.get(l) {
+                        Some((segs, hits)) => Ok(Some(Collisions::count(segs, hits, mesh)?)),
+                        None => Ok(None),
+                    }
+                };
                 let row = |method: &str, cpu_seconds, chamfer| ScenarioRow {
                     shape: shape.name.clone(),
                     n,
@@ -318,27 +474,35 @@ pub(crate) fn run(
                     owners: 0,
                     without_point: 0,
                     measured: 0.0,
+                    collision: None,
                     status: "ok".into(),
                 };
-                rows.push(row("mc-clean", 0.0, clean_mc));
+                if scenario != Scenario::Swept {
+                    rows.push(row("mc-clean", 0.0, chamfer(&clean_mc)?));
+                }
                 let t = Instant::now();
                 let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
-                rows.push(row("mc", t.elapsed().as_secs_f64(), chamfer(&mc)?));
+                let cpu = t.elapsed().as_secs_f64();
+                rows.push(ScenarioRow {
+                    collision: collisions(&mc)?,
+                    ..row("mc", cpu, chamfer(&mc)?)
+                });
                 for &(label, given) in scenario.runs() {
                     let params = scenario.params(level, h, given);
                     let base = row(label, 0.0, f64::NAN);
-                    let run = match (scenario, label) {
-                        (Scenario::Scattered, "rfta-grid") => match &on_grid {
-                            Some(done) => ScenarioRow {
+                    let reuse = matches!(
+                        (scenario, label),
+                        (Scenario::Scattered, "rfta-grid") | (Scenario::Collision, _)
+                    );
+                    let (mut run, mesh) = match (&once, scenario, label) {
+                        (Some((done, mesh)), ..) if reuse => (
+                            ScenarioRow {
                                 level,
                                 ..done.clone()
                             },
-                            None => {
-                                let samples = SdfSamples::grid(grid, values.clone())?;
-                                run_rfta(scenario, &samples, &params, h, base, &chamfer)?
-                            }
-                        },
-                        (Scenario::Scattered, _) => {
+                            mesh.clone(),
+                        ),
+                        (_, Scenario::Scattered, "rfta-default") => {
                             let seed = rng.next_u64();
                             let samples = scattered(&shape.gt, &gt_index, &grid, level, seed)?;
                             run_rfta(scenario, &samples, &params, h, base, &chamfer)?
@@ -348,8 +512,12 @@ pub(crate) fn run(
                             run_rfta(scenario, &samples, &params, h, base, &chamfer)?
                         }
                     };
-                    if scenario == Scenario::Scattered && label == "rfta-grid" {
-                        on_grid.get_or_insert_with(|| run.clone());
+                    if reuse && once.is_none() {
+                        once = Some((run.clone(), mesh.clone()));
+                    }
+                    run.collision = collisions(&mesh)?;
+                    if let Some(sweep) = sweeps.get(l) {
+                        run.measured = sweep.copies() as f64;
                     }
                     rows.push(run);
                 }
@@ -368,16 +536,25 @@ pub(crate) fn run(
         samples,
     )?;
     let mut methods: Vec<&str> = scenario.runs().iter().map(|r| r.0).collect();
-    methods.extend(["mc", "mc-clean"]);
+    methods.push("mc");
+    if scenario != Scenario::Swept {
+        methods.push("mc-clean");
+    }
+    // The collision scenario charts the share of segments answered wrongly, the others Chamfer.
+    let measure = |rows: &[ScenarioRow], m: &str, p: f64| match scenario {
+        Scenario::Collision => mean_of(rows, m, p, None, |r| {
+            r.collision.map(|c| 100.0 * c.misclassified())
+        }),
+        _ => mean_chamfer(rows, m, p, None),
+    };
     let series: Vec<Line> = methods
         .iter()
+        .filter(|m| !(scenario == Scenario::Collision && **m == "mc-clean"))
         .map(|m| {
             let pts = levels
                 .iter()
                 .enumerate()
-                .filter_map(|(i, &p)| {
-                    mean_chamfer(&rows, m, p, None).map(|v| (scenario.chart_x(i, p), v))
-                })
+                .filter_map(|(i, &p)| measure(&rows, m, p).map(|v| (scenario.chart_x(i, p), v)))
                 .collect();
             (m.to_string(), *m == "mc-clean", pts)
         })
@@ -387,14 +564,34 @@ pub(crate) fn run(
         .enumerate()
         .map(|(i, &p)| (scenario.chart_x(i, p), scenario.level_label(p)))
         .collect();
+    let title = match scenario {
+        Scenario::Collision => {
+            "Segments answered wrongly, % (false negatives + false positives; log scale)".into()
+        }
+        _ => format!("Mean Chamfer vs {} (log scale)", scenario.name()),
+    };
     line_chart(
         &out.join("chamfer.svg"),
-        &format!("Mean Chamfer vs {} (log scale)", scenario.name()),
+        &title,
         scenario.axis_label(),
         &ticks,
         &series,
         1,
     )
+}
+
+/// Chamfer distance between `gt` and `mesh` (NaN for an empty mesh).
+fn score(gt: (&TriMesh, &MeshIndex), mesh: &TriMesh, samples: usize) -> Result<f64> {
+    if mesh.is_empty() {
+        return Ok(f64::NAN);
+    }
+    let index = MeshIndex::new(mesh)?;
+    Ok(rfta_metrics::chamfer_indexed(
+        gt,
+        (mesh, &index),
+        samples,
+        1,
+    ))
 }
 
 /// `grid.len()` scattered samples of `gt` at exact signed distances: uniform in the grid's box
@@ -438,7 +635,8 @@ fn scattered(
     Ok(SdfSamples::scattered(positions, values)?)
 }
 
-/// rfta with `params` on `samples`; `row` holds the row's identity.
+/// rfta with `params` on `samples`; `row` holds the row's identity. Also returns the mesh
+/// (empty when the run failed).
 fn run_rfta(
     scenario: Scenario,
     samples: &SdfSamples,
@@ -446,7 +644,7 @@ fn run_rfta(
     h: f64,
     row: ScenarioRow,
     chamfer: &dyn Fn(&TriMesh) -> Result<f64>,
-) -> Result<ScenarioRow> {
+) -> Result<(ScenarioRow, TriMesh)> {
     let values = samples.values();
     let cpu = crate::bench::process_usage().0;
     let result = rfta::reconstruct(samples, params);
@@ -458,7 +656,7 @@ fn run_rfta(
             let clamped = r
                 .clamp
                 .map_or(0, |c| values.iter().filter(|v| v.abs() >= c).count());
-            ScenarioRow {
+            let row = ScenarioRow {
                 cpu_seconds,
                 chamfer: chamfer(&out.mesh)?,
                 owners: (r.samples - r.far_spheres).saturating_sub(clamped),
@@ -469,24 +667,40 @@ fn run_rfta(
                     _ => 0.0,
                 },
                 ..row
-            }
+            };
+            (row, out.mesh)
         }
-        Err(e) => ScenarioRow {
-            cpu_seconds,
-            status: match e {
-                rfta::Error::NotADistance(_) => format!("refused: {e}"),
-                _ => format!("failed: {e}"),
+        Err(e) => (
+            ScenarioRow {
+                cpu_seconds,
+                status: match e {
+                    rfta::Error::NotADistance(_) => format!("refused: {e}"),
+                    _ => format!("failed: {e}"),
+                },
+                ..row
             },
-            ..row
-        },
+            TriMesh::default(),
+        ),
     })
 }
 
 fn mean_chamfer(rows: &[ScenarioRow], method: &str, level: f64, n: Option<usize>) -> Option<f64> {
+    mean_of(rows, method, level, n, |r| Some(r.chamfer))
+}
+
+/// The mean of `value` over the rows of `method` at `level` (and `n`, if given) where it is a
+/// finite number.
+fn mean_of(
+    rows: &[ScenarioRow],
+    method: &str,
+    level: f64,
+    n: Option<usize>,
+    value: impl Fn(&ScenarioRow) -> Option<f64>,
+) -> Option<f64> {
     let v: Vec<f64> = rows
         .iter()
         .filter(|r| r.method == method && r.level == level && n.is_none_or(|n| r.n == n))
-        .map(|r| r.chamfer)
+        .filter_map(value)
         .filter(|c| c.is_finite())
         .collect();
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
@@ -494,12 +708,12 @@ fn mean_chamfer(rows: &[ScenarioRow], method: &str, level: f64, n: Option<usize>
 
 fn write_csv(scenario: Scenario, path: &Path, rows: &[ScenarioRow]) -> Result<()> {
     let mut s = String::from(
-        "scenario,shape,n,level,method,cpu_seconds,chamfer,owners,without_point,measured,status\n",
+        "scenario,shape,n,level,method,cpu_seconds,chamfer,owners,without_point,measured,segments,gt_hits,false_negatives,false_positives,status\n",
     );
     for r in rows {
         writeln!(
             s,
-            "{},{},{},{},{},{:.4},{:.6},{},{},{:.5},\"{}\"",
+            "{},{},{},{},{},{:.4},{:.6},{},{},{:.5},{},\"{}\"",
             scenario.name(),
             r.shape,
             r.n,
@@ -510,6 +724,10 @@ fn write_csv(scenario: Scenario, path: &Path, rows: &[ScenarioRow]) -> Result<()
             r.owners,
             r.without_point,
             r.measured,
+            r.collision.map_or(",,,".into(), |c| format!(
+                "{},{},{},{}",
+                c.segments, c.gt_hits, c.false_negatives, c.false_positives
+            )),
             r.status.replace('"', "'")
         )?;
     }
@@ -526,14 +744,26 @@ fn write_markdown(
     samples: usize,
 ) -> Result<()> {
     let mut s = format!("# Scenario: {}\n\n", scenario.title());
-    writeln!(
-        s,
-        "{} Runs on one thread; Chamfer with {samples} samples per side. \"kept\" is the share of the spheres that may own a point (near the surface, not clamped) that ended with one, for the worst shape; \"CPU / clean\" is the largest ratio of a run's CPU time to the clean grid's (noise) or the default setting's (rounds).\n",
-        scenario.explanation()
-    )?;
+    if scenario == Scenario::Collision {
+        writeln!(
+            s,
+            "{} Runs on one thread; Chamfer with {samples} samples per side; rates are means over the shapes.\n",
+            scenario.explanation()
+        )?;
+    } else {
+        writeln!(
+            s,
+            "{} Runs on one thread; Chamfer with {samples} samples per side. \"kept\" is the share of the spheres that may own a point (near the surface, not clamped) that ended with one, for the worst shape; \"CPU / clean\" is the largest ratio of a run's CPU time to the clean grid's (noise) or the default setting's (rounds).\n",
+            scenario.explanation()
+        )?;
+    }
     let fmt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.5}"));
     for &n in res {
         writeln!(s, "## N = {n}\n")?;
+        if scenario == Scenario::Collision {
+            collision_table(&mut s, rows, levels, n)?;
+            continue;
+        }
         for &(method, _) in scenario.runs() {
             writeln!(s, "`{method}`:\n")?;
             s.push_str("| level | Chamfer | mc (changed grid) | mc (clean grid) | kept, worst shape | CPU / clean, worst shape | measured, mean | refused |\n|---|---|---|---|---|---|---|---|\n");
@@ -582,6 +812,7 @@ fn write_markdown(
                     match scenario {
                         Scenario::Noise => format!("{:.2}%", 100.0 * measured),
                         Scenario::Clamp => format!("{measured:.2} h"),
+                        Scenario::Swept => format!("{measured:.0} copies"),
                         _ => "-".into(),
                     },
                     ours.len()
@@ -589,6 +820,28 @@ fn write_markdown(
             }
             s.push('\n');
         }
+    }
+    if scenario == Scenario::Collision {
+        s.push_str("## Every run\n\n| shape | N | length | method | CPU s | Chamfer | hit the ground truth | false negatives | false positives |\n|---|---|---|---|---|---|---|---|---|\n");
+        for r in rows.iter().filter(|r| r.method != "mc-clean") {
+            let Some(c) = r.collision else { continue };
+            writeln!(
+                s,
+                "| {} | {} | {} | {} | {:.2} | {:.5} | {} of {} | {} | {} |",
+                r.shape,
+                r.n,
+                scenario.level_label(r.level),
+                r.method,
+                r.cpu_seconds,
+                r.chamfer,
+                c.gt_hits,
+                c.segments,
+                c.false_negatives,
+                c.false_positives
+            )?;
+        }
+        rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
+        return Ok(());
     }
     s.push_str("## Every run\n\n| shape | N | level | method | CPU s | Chamfer | without a point | measured | status |\n|---|---|---|---|---|---|---|---|---|\n");
     for r in rows.iter().filter(|r| r.method != "mc-clean") {
@@ -608,5 +861,32 @@ fn write_markdown(
         )?;
     }
     rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
+    Ok(())
+}
+
+/// The collision scenario's table at `n`: per length and method, the mean rates over the shapes.
+fn collision_table(s: &mut String, rows: &[ScenarioRow], levels: &[f64], n: usize) -> Result<()> {
+    s.push_str("| length | method | Chamfer | false negatives (of the hits) | false positives (of the misses) | wrong (of all) |\n|---|---|---|---|---|---|\n");
+    for &level in levels {
+        for method in ["rfta-default", "mc"] {
+            let pct = |f: fn(&Collisions) -> f64| {
+                mean_of(rows, method, level, Some(n), |r| {
+                    r.collision.as_ref().map(|c| 100.0 * f(c))
+                })
+                .map_or("-".into(), |v| format!("{v:.2}%"))
+            };
+            writeln!(
+                s,
+                "| {} | {method} | {} | {} | {} | {} |",
+                Scenario::Collision.level_label(level),
+                mean_chamfer(rows, method, level, Some(n))
+                    .map_or("-".into(), |v| format!("{v:.5}")),
+                pct(Collisions::false_negative_rate),
+                pct(Collisions::false_positive_rate),
+                pct(Collisions::misclassified),
+            )?;
+        }
+    }
+    s.push('\n');
     Ok(())
 }
