@@ -812,7 +812,7 @@ fn write_markdown(
                     match scenario {
                         Scenario::Noise => format!("{:.2}%", 100.0 * measured),
                         Scenario::Clamp => format!("{measured:.2} h"),
-                        Scenario::Swept => format!("{measured:.0} copies"),
+                        Scenario::Swept => format!("copies: {measured:.0}"),
                         _ => "-".into(),
                     },
                     ours.len()
