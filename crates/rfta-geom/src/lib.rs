@@ -36,6 +36,7 @@ pub use glam;
 
 mod aabb;
 mod error;
+pub mod feature_transform;
 pub mod kernels;
 mod mesh;
 mod points;

@@ -15,7 +15,8 @@
 //!   `h / sqrt(3)`. Samples whose six neighbours all carry exactly their value, at the largest
 //!   magnitude of their sign, are the flat plateau of a clamped (truncated) SDF.
 //!
-//! Neither test needs the surface. Both run in `O(n log n)`.
+//! Neither test needs the surface. Both run in `O(n log n)`; on a grid, the separation test runs
+//! in `O(n)` (the exact feature transform, [`rfta_geom::Grid::nearest_marked`]).
 //!
 //! The pipeline checks at both ends: [`inspect`] and [`Params::check`]'s policy before anything
 //! is built, and the mesh (finite vertices, degenerate faces, watertightness, components) before
@@ -95,7 +96,25 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
     let pos: Vec<usize> = (0..values.len()).filter(|&i| values[i] > 0.0).collect();
     if !neg.is_empty() && !pos.is_empty() {
         let mut ratios: Vec<(usize, usize, f64)> = Vec::with_capacity(neg.len() + pos.len());
+        let ratio = |i: usize, j: usize| {
+            let d = samples.position(i).distance(samples.position(j));
+            let gap = values[i].abs() + values[j].abs();
+            let ratio = if d > 0.0 { gap / d } else { f64::INFINITY };
+            (i, j, ratio)
+        };
         for (from, to) in [(&neg, &pos), (&pos, &neg)] {
+            if let Some(grid) = samples.as_grid() {
+                // On a grid, the exact feature transform finds every sample's nearest sample of
+                // the other sign in linear time (a tree query per sample cost seconds at 129^3,
+                // most of them for far samples).
+                let mut marked = vec![false; values.len()];
+                for &j in to.iter() {
+                    marked[j] = true;
+                }
+                let nearest = grid.nearest_marked(&marked);
+                ratios.par_extend(from.par_iter().map(|&i| ratio(i, nearest[i] as usize)));
+                continue;
+            }
             let pts: Vec<[f64; 3]> = to.iter().map(|&j| samples.position(j).to_array()).collect();
             let Ok(kd) = ImmutableKdTree::<f64, 3>::new_from_slice(&pts) else {
                 continue;
@@ -105,11 +124,7 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
                     .query(&samples.position(i).to_array())
                     .nearest_one::<SquaredEuclidean<f64>>()
                     .execute();
-                let j = to[nn.item as usize];
-                let d = nn.distance.sqrt();
-                let gap = values[i].abs() + values[j].abs();
-                let ratio = if d > 0.0 { gap / d } else { f64::INFINITY };
-                (i, j, ratio)
+                ratio(i, to[nn.item as usize])
             }));
         }
         out.checked = ratios.len();
