@@ -141,16 +141,16 @@ mod tests {
             let mut rng = crate::rng::Rng::new(seed);
             let marked: Vec<bool> = (0..grid.len()).map(|_| rng.next_f64() < density).collect();
             let nearest = grid.nearest_marked(&marked);
-            for i in 0..grid.len() {
+            for (i, &found) in nearest.iter().enumerate() {
                 let p = grid.position(i);
                 let brute = (0..grid.len())
                     .filter(|&j| marked[j])
                     .map(|j| p.distance_squared(grid.position(j)))
                     .fold(f64::INFINITY, f64::min);
                 if brute.is_infinite() {
-                    prop_assert_eq!(nearest[i], NONE);
+                    prop_assert_eq!(found, NONE);
                 } else {
-                    let j = nearest[i] as usize;
+                    let j = found as usize;
                     prop_assert!(marked[j]);
                     let d = p.distance_squared(grid.position(j));
                     prop_assert!((d - brute).abs() <= 1e-9 * brute.max(1.0), "{} vs {}", d, brute);
