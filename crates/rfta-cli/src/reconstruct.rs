@@ -107,7 +107,8 @@ pub(crate) struct Tuning {
     /// Rasterize on the GPU.
     #[arg(long, value_enum, default_value_t = Gpu::Off)]
     gpu: Gpu,
-    /// Remove closed islands smaller than this fraction of the sample spacing (0 keeps all).
+    /// Closed islands smaller than this many sample spacings across stay only where a sample
+    /// inside them witnesses them (0 keeps all) [default: 2].
     #[arg(long)]
     min_island: Option<f64>,
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
@@ -228,13 +229,13 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     }
     if r.islands_removed > 0 {
         ui.detail(format!(
-            "removed {} small closed island(s)",
+            "removed {} small closed island(s) that no sample witnesses",
             r.islands_removed
         ));
     }
     if r.unsupported_removed > 0 {
         ui.detail(format!(
-            "removed {} component(s) the samples contradict (inside sample spheres, or enclosing no sample of their inside)",
+            "removed {} component(s) the samples contradict (inside sample spheres, or an inward-facing shell around nothing)",
             r.unsupported_removed
         ));
     }

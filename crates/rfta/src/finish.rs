@@ -193,11 +193,11 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
 /// Why a component of the mesh goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Island {
-    /// Its bounding-box diagonal is below [`Params::min_island`] spacings.
+    /// Its bounding-box diagonal is below [`Params::min_island`] spacings and it encloses no
+    /// sample of the sign its orientation gives its inside: nothing witnesses it.
     Small,
-    /// The samples contradict it: every vertex lies inside a sample sphere, or it is at most
-    /// [`UNSUPPORTED_BELOW`] spacings across and encloses no sample of the sign its orientation
-    /// gives its inside; or it faces inward with no other component around it.
+    /// The samples contradict it: every vertex lies inside a sample sphere; or it faces inward
+    /// with no other component around it.
     Unsupported,
 }
 
@@ -235,9 +235,6 @@ fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
     winding < 0.5
 }
 
-/// Components at most this many sample spacings across must enclose a sample to stay.
-const UNSUPPORTED_BELOW: f64 = 2.0;
-
 /// The verdict on one component (`faces` of `mesh`, in the samples' coordinates, within
 /// `bounds`); `tree` holds every sample sphere, built on first use.
 fn judge(
@@ -251,9 +248,6 @@ fn judge(
     use rayon::prelude::*;
     let h = unit.input_spacing;
     let diag = (bounds.max - bounds.min).length();
-    if diag < params.min_island * h {
-        return Some(Island::Small);
-    }
     // The surface may not enter a sample sphere: a component inside them is not there.
     let mut vertices: Vec<u32> = faces.iter().flat_map(|&f| mesh.faces[f]).collect();
     vertices.sort_unstable();
@@ -267,8 +261,8 @@ fn judge(
         return Some(Island::Unsupported);
     }
     // A small closed component stands for a solid (outward) or a cavity (inward): some sample
-    // inside it must say so.
-    if diag < UNSUPPORTED_BELOW * h {
+    // inside it must say so, however small it is.
+    if diag < params.min_island * h {
         let supported = (0..unit.len()).any(|i| {
             let p = unit.to_input(unit.centers[i]);
             if !bounds.contains(p) {
@@ -286,7 +280,7 @@ fn judge(
             (w > 0.5 && v < 0.0) || (w < -0.5 && v > 0.0)
         });
         if !supported {
-            return Some(Island::Unsupported);
+            return Some(Island::Small);
         }
     }
     None
@@ -543,12 +537,17 @@ mod tests {
             judge(&unit, &params, &OnceLock::new(), m, &faces, bounds)
         };
         assert_eq!(judge_on(&with_solid, &solid), None);
+        // Without the small parts, the samples around them are large: inside their spheres.
         assert_eq!(judge_on(&plain, &solid), Some(Island::Unsupported));
         assert_eq!(judge_on(&with_cavity, &cavity), None);
         assert_eq!(judge_on(&plain, &cavity), Some(Island::Unsupported));
-        // Below half a spacing across: small, whatever the samples say.
+        // Size alone removes nothing: a ball a fifth of a spacing across, exactly where a
+        // negative sample says there is one, stays; a ball as small that straddles the big ball's
+        // surface around no sample goes.
+        let tiny = samples(&|p| ball_sdf(p).min((p - solid_c).length() - 0.01));
+        assert_eq!(judge_on(&tiny, &ball(solid_c, 0.01)), None);
         assert_eq!(
-            judge_on(&with_solid, &ball(solid_c, 0.01)),
+            judge_on(&tiny, &ball(DVec3::new(0.5, 0.05, 0.05), 0.01)),
             Some(Island::Small)
         );
     }

@@ -89,7 +89,8 @@ pub struct Report {
     /// Spheres farther than [`crate::Params::owner_band`] from the surface: constraints that own
     /// no point (not counted in `spheres_without_point`).
     pub far_spheres: usize,
-    /// Small closed islands removed from the final mesh (see [`crate::Params::min_island`]).
+    /// Small closed islands removed from the final mesh because no sample witnesses them (see
+    /// [`crate::Params::min_island`]).
     pub islands_removed: usize,
     /// Samples the final screened Poisson function put on the wrong side, after its first solve
     /// and after each re-solve that screened them toward their side
@@ -98,8 +99,8 @@ pub struct Report {
     /// Mesh vertices that were inside a sample sphere and moved onto its boundary.
     pub vertices_pushed_out: usize,
     /// Components removed from the final mesh because the samples contradict them: every vertex
-    /// lies inside a sample sphere (by more than the tolerance), or, at most 2 spacings across,
-    /// they enclose no sample of the sign their orientation gives their inside.
+    /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
+    /// other component around them.
     pub unsupported_removed: usize,
     /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
     pub stopped_early: Option<String>,
