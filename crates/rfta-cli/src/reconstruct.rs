@@ -256,6 +256,12 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
             r.vertices_pushed_out
         ));
     }
+    if r.dents > 0 {
+        ui.detail(format!(
+            "split {} faces that cut a small sample sphere with the sample on the wrong side, and dented them past it",
+            r.dents
+        ));
+    }
     let c = &r.consistency;
     ui.detail(format!(
         "agreement with the {} samples (h = {:.4}): {} on the wrong side, {} spheres entered by more than {} h (deepest {:.2} h), {} gaps over {} h",

@@ -65,6 +65,7 @@ pub(crate) fn finish(
     let near = SphereTree::with_indices(&unit.spheres, &near);
     report.vertices_pushed_out =
         push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
+    report.dents = dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
     let topology = rfta_mesh::Topology::of(&mesh);
     report.mesh = check::mesh(&mesh, &topology)?;
@@ -114,6 +115,75 @@ pub(crate) fn finish(
         points,
         report,
     })
+}
+
+/// Samples this close to the surface (in spacings) are the ones [`dent_wrong_side`] looks at.
+const DENT_BELOW: f64 = 0.5;
+
+/// How far beyond its sphere a dent's new vertex lands, in sample spacings.
+const DENT_MARGIN: f64 = 0.05;
+
+/// A small sphere (the sample less than [`DENT_BELOW`] spacings from the surface) that a face
+/// cuts with the sample on the wrong side of the mesh: no vertex need lie inside it (the faces
+/// are about a quarter of a spacing across), so [`push_out_of_spheres`] cannot clear it, and
+/// moving the surface away from the sample would leave it on the wrong side. The face is split
+/// at its point nearest the sample, and the new vertex moves through the sphere to just beyond
+/// its far side (along the face normal, [`DENT_MARGIN`] past it): the sample then lies in a
+/// shallow dent, on its own side. A split whose new faces would turn over, or of a face nearer
+/// an edge than a fiftieth of its barycentric range, is not made; a face split once is left to
+/// the next sample. Samples are taken in order, so the result does not depend on the thread
+/// count. Returns how many dents were made.
+fn dent_wrong_side(mesh: &mut TriMesh, samples: &SdfSamples) -> usize {
+    use rayon::prelude::*;
+    let h = consistency::spacing(samples);
+    let Ok(index) = rfta_mesh::MeshIndex::new(mesh) else {
+        return 0;
+    };
+    let values = samples.values();
+    let wrong: Vec<(usize, u32)> = (0..values.len())
+        .into_par_iter()
+        .filter_map(|i| {
+            let (p, s) = (samples.position(i), values[i]);
+            let r = s.abs();
+            if r <= consistency::SIGN_MARGIN * h || r >= DENT_BELOW * h {
+                return None;
+            }
+            let c = index.closest_point_within(p, r * r)?;
+            let inside = index.winding_number(p) > 0.5;
+            (inside != (s < 0.0) && c.barycentric.iter().all(|&b| b > 0.02)).then_some((i, c.face))
+        })
+        .collect();
+    let mut touched = vec![false; mesh.faces.len()];
+    let mut dents = 0;
+    for (i, f) in wrong {
+        let f = f as usize;
+        if touched[f] {
+            continue;
+        }
+        touched[f] = true;
+        let (p, s) = (samples.position(i), values[i]);
+        let n = mesh.face_normal_scaled(f).normalize_or_zero();
+        if n == DVec3::ZERO {
+            continue;
+        }
+        // Outside (s > 0): the surface passes behind the sample, against the outward normal.
+        let apex = p - s.signum() * (s.abs() + DENT_MARGIN * h) * n;
+        let [a, b, c] = mesh.faces[f];
+        let k = mesh.vertices.len() as u32;
+        let split = [[a, b, k], [b, c, k], [c, a, k]];
+        let turned = split.iter().any(|&[u, v, _]| {
+            let [u, v] = [u, v].map(|x| mesh.vertices[x as usize]);
+            (v - u).cross(apex - u).dot(n) <= 0.0
+        });
+        if turned {
+            continue;
+        }
+        mesh.vertices.push(apex);
+        mesh.faces[f] = split[0];
+        mesh.faces.extend_from_slice(&split[1..]);
+        dents += 1;
+    }
+    dents
 }
 
 /// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
@@ -386,6 +456,47 @@ fn remove_islands(
 mod tests {
     use super::*;
     use rfta_geom::shapes;
+
+    #[test]
+    fn a_dent_puts_a_sample_whose_small_sphere_a_face_cuts_on_its_side() {
+        let mut mesh = shapes::icosphere(1.0, 2);
+        let [a, b, c] = mesh.triangle(0);
+        let n = (b - a).cross(c - a).normalize();
+        let centroid = (a + b + c) / 3.0;
+        // Eight far samples (0.2 apart) set the spacing; the ninth lies 0.003 inside face 0 and
+        // says "outside, 0.01 from the surface": its sphere is cut by the face, no vertex in it.
+        let mut positions: Vec<DVec3> = (0..8)
+            .map(|k| {
+                let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
+                DVec3::new(bit(0), bit(1), 2.0 + bit(2))
+            })
+            .collect();
+        let mut values: Vec<f64> = positions.iter().map(|p| p.length() - 1.0).collect();
+        let wrong = centroid - 0.003 * n;
+        positions.push(wrong);
+        values.push(0.01);
+        // A sample on its side, equally close, changes nothing.
+        let right = (a + 2.0 * b + 3.0 * c) / 6.0 + 0.003 * n;
+        positions.push(right);
+        values.push(0.01);
+        let samples = SdfSamples::scattered(positions, values).expect("samples");
+        let winding = |m: &TriMesh, p: DVec3| {
+            rfta_mesh::MeshIndex::new(m)
+                .expect("mesh")
+                .winding_number(p)
+        };
+        assert!(winding(&mesh, wrong) > 0.5, "inside before");
+        let faces = mesh.faces.len();
+        assert_eq!(dent_wrong_side(&mut mesh, &samples), 1);
+        assert_eq!(mesh.faces.len(), faces + 2);
+        assert!(winding(&mesh, wrong) < 0.5, "outside after");
+        assert!(winding(&mesh, right) < 0.5);
+        let topology = rfta_mesh::Topology::of(&mesh);
+        assert!(topology.is_watertight() && topology.is_consistently_oriented());
+        // Its sphere is clear of the dent's apex.
+        let apex = mesh.vertices[mesh.vertices.len() - 1];
+        assert!(apex.distance(wrong) > 0.01);
+    }
 
     fn union(parts: &[TriMesh]) -> TriMesh {
         let mut out = TriMesh::default();

@@ -98,6 +98,9 @@ pub struct Report {
     pub side_errors: Vec<usize>,
     /// Mesh vertices that were inside a sample sphere and moved onto its boundary.
     pub vertices_pushed_out: usize,
+    /// Faces split so that a sample near the surface whose small sphere they cut lies on its own
+    /// side (a dent; see `finish::dent_wrong_side`).
+    pub dents: usize,
     /// Components removed from the final mesh because the samples contradict them: every vertex
     /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
     /// other component around them.
