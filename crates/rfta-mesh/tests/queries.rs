@@ -187,16 +187,26 @@ fn empty_and_invalid_meshes_are_errors() {
     assert!((index.unsigned_distance(DVec3::new(0.2, 0.2, 1.0)) - 1.0).abs() < 1e-15);
 }
 
+/// `n` triangles with corners uniform in the unit cube, and their index.
+fn random_soup(rng: &mut Rng, n: usize) -> (TriMesh, MeshIndex) {
+    let vertices: Vec<DVec3> = (0..3 * n)
+        .map(|_| DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()))
+        .collect();
+    let faces = (0..n as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    let mesh = TriMesh::new(vertices, faces).expect("valid");
+    let index = MeshIndex::new(&mesh).expect("non-empty");
+    (mesh, index)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
     #[test]
     fn closest_point_on_random_soups(seed in 0u64..10_000, n in 1usize..60) {
         let mut rng = Rng::new(seed);
+        let (mesh, index) = random_soup(&mut rng, n);
         let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-        let vertices: Vec<DVec3> = (0..3 * n).map(|_| r()).collect();
-        let faces = (0..n as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-        let mesh = TriMesh::new(vertices, faces).expect("valid");
-        let index = MeshIndex::new(&mesh).expect("non-empty");
         for _ in 0..20 {
             let p = r() * 3.0 - DVec3::ONE;
             let brute = brute_closest(&mesh, p);
@@ -207,25 +217,28 @@ proptest! {
     #[test]
     fn segment_hits_equal_brute_force_on_random_soups(seed in 0u64..10_000, n in 1usize..60) {
         let mut rng = Rng::new(seed);
+        let (mesh, index) = random_soup(&mut rng, n);
         let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-        let vertices: Vec<DVec3> = (0..3 * n).map(|_| r()).collect();
-        let faces = (0..n as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-        let mesh = TriMesh::new(vertices, faces).expect("valid");
-        let index = MeshIndex::new(&mesh).expect("non-empty");
-        let mut hits = 0;
+        let brute = |a: DVec3, b: DVec3| {
+            mesh.faces.iter().any(|&[i, j, k]| {
+                let v = &mesh.vertices;
+                kernels::segment_triangle(a, b, v[i as usize], v[j as usize], v[k as usize]).is_some()
+            })
+        };
         for i in 0..40 {
             let a = r() * 3.0 - DVec3::ONE;
             // Some segments run along an axis, where the box test divides by zero.
             let b = if i % 4 == 0 { a + DVec3::X * (r().x - 0.5) * 2.0 } else { r() * 3.0 - DVec3::ONE };
-            let brute = mesh.faces.iter().any(|&[i, j, k]| {
-                let v = &mesh.vertices;
-                kernels::segment_triangle(a, b, v[i as usize], v[j as usize], v[k as usize]).is_some()
-            });
-            prop_assert_eq!(index.segment_hits(a, b), brute);
-            hits += usize::from(brute);
+            prop_assert_eq!(index.segment_hits(a, b), brute(a, b));
         }
-        // The soups are dense enough that the test exercises hits as well as misses.
-        prop_assert!(n < 20 || hits > 0);
+        // Hits too: a segment through each triangle's centroid along its normal crosses it.
+        for f in 0..mesh.faces.len() {
+            let [a, b, c] = mesh.triangle(f);
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            prop_assume!(n != DVec3::ZERO);
+            let m = (a + b + c) / 3.0;
+            prop_assert!(index.segment_hits(m - 0.1 * n, m + 0.1 * n));
+        }
     }
 }
 
