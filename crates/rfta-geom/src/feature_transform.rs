@@ -85,8 +85,8 @@ impl Envelope {
         let f = &self.f;
         // Where the parabola at q starts to lie below the one at p (p < q).
         let cross = |p: usize, q: usize| {
-            let (p, q) = (p as f64, q as f64);
-            ((f[q as usize] + w2 * q * q) - (f[p as usize] + w2 * p * p)) / (2.0 * w2 * (q - p))
+            let (pf, qf) = (p as f64, q as f64);
+            ((f[q] + w2 * qf * qf) - (f[p] + w2 * pf * pf)) / (2.0 * w2 * (qf - pf))
         };
         for q in (0..n).filter(|&q| f[q].is_finite()) {
             loop {

@@ -535,12 +535,16 @@ fn run(
         if last || wrong.is_empty() {
             break (sol, iso);
         }
-        resolve = Some(solve::WarmStart {
+        // The octree stays: its node index is copied once, the coefficients each pass.
+        let start = resolve.get_or_insert_with(|| solve::WarmStart {
             nodes: levels.iter().map(|l| l.node_index.clone()).collect(),
-            x: sol.x.clone(),
+            x: Vec::new(),
         });
         if first.is_none() {
+            start.x = sol.x.clone();
             first = Some((sol, iso));
+        } else {
+            start.x = sol.x;
         }
         for i in wrong {
             match active[i] {

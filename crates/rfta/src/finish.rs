@@ -597,9 +597,7 @@ mod tests {
     fn an_inverted_shell_goes_and_a_cavity_stays() {
         let inner = ball(DVec3::ZERO, 0.5);
         let mut shell = ball(DVec3::ZERO, 3.0);
-        for f in &mut shell.faces {
-            f.swap(1, 2);
-        }
+        shell.flip();
         let mesh = union(&[inner.clone(), shell.clone()]);
         let (kept, removed) = remove_islands(
             &mesh,

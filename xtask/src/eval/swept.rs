@@ -91,7 +91,9 @@ impl<'a> Sweep<'a> {
         let mut best = f64::INFINITY;
         for c in &self.copies {
             let box_d2 = c.bounds.distance_squared(p);
-            // Outside a copy's box, the copy is farther than its box.
+            // Outside a copy's box, `p` is outside the copy and at least the box's distance from
+            // it: that copy cannot lower a best that is negative (inside another copy) or no
+            // farther than the box (`best * |best|` is the signed square of `best`).
             if box_d2 > 0.0 && box_d2 >= best * best.abs() {
                 continue;
             }
