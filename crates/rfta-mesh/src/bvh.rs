@@ -51,6 +51,17 @@ pub struct ClosestPoint {
     pub barycentric: [f64; 3],
 }
 
+/// The answer of [`MeshIndex::shell`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shell {
+    /// Some point of the mesh is closer than the shell's inner radius; the closest one.
+    Closer(ClosestPoint),
+    /// The nearest point of the mesh lies in the shell.
+    Within,
+    /// No point of the mesh is within the shell's outer radius.
+    Beyond,
+}
+
 struct TriBox(ObAabb);
 
 impl obvhs::Boundable for TriBox {
@@ -219,6 +230,69 @@ impl MeshIndex {
             }
         }
         best
+    }
+
+    /// Where the mesh lies relative to the spherical shell `lo <= |x - p| <= hi` around `p`
+    /// (`lo <= hi`): closer than `lo` (with the exact closest point), within the shell, or
+    /// beyond it. Cheaper than [`MeshIndex::closest_point`] when the answer is "within": the
+    /// search stops looking for nearer points once it has one in the shell, and only proves that
+    /// none is closer than `lo`.
+    pub fn shell(&self, p: DVec3, lo: f64, hi: f64) -> Shell {
+        let lo2 = if lo > 0.0 { lo * lo } else { 0.0 };
+        // A negative outer radius holds no point: every box is pruned.
+        let hi2 = if hi >= 0.0 { hi * hi } else { -1.0 };
+        let mut best: Option<ClosestPoint> = None;
+        let mut within = false;
+        // Boxes at this squared distance or farther cannot change the answer (`lo2` and the
+        // nearest point found so far stay strict: a point at exactly `lo` is in the shell).
+        let mut bound = hi2;
+        let mut strict = false;
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((0, self.nodes[0].bounds.distance_squared(p)));
+        while let Some((idx, d2)) = stack.pop() {
+            if d2 > bound || (strict && d2 >= bound) {
+                continue;
+            }
+            let node = &self.nodes[idx as usize];
+            if node.leaf {
+                for t in node.a..node.a + node.b {
+                    let [a, b, c] = self.tris[t as usize];
+                    let (q, bary) = kernels::closest_point_on_triangle(p, a, b, c);
+                    let dq = p.distance_squared(q);
+                    if dq < lo2 {
+                        if best.is_none_or(|b| dq <= b.distance_squared) {
+                            best = Some(ClosestPoint {
+                                point: q,
+                                distance_squared: dq,
+                                face: self.face_ids[t as usize],
+                                barycentric: bary,
+                            });
+                            bound = dq;
+                            strict = false;
+                        }
+                    } else if dq <= hi2 && best.is_none() && !within {
+                        within = true;
+                        bound = lo2;
+                        strict = true;
+                    }
+                }
+            } else {
+                let dl = self.nodes[node.a as usize].bounds.distance_squared(p);
+                let dr = self.nodes[node.b as usize].bounds.distance_squared(p);
+                if dl <= dr {
+                    stack.push((node.b, dr));
+                    stack.push((node.a, dl));
+                } else {
+                    stack.push((node.a, dl));
+                    stack.push((node.b, dr));
+                }
+            }
+        }
+        match best {
+            Some(c) => Shell::Closer(c),
+            None if within => Shell::Within,
+            None => Shell::Beyond,
+        }
     }
 
     /// Whether the segment from `a` to `b` crosses the mesh (a triangle, its edges included; see

@@ -38,7 +38,7 @@ mod sample;
 mod topology;
 mod winding;
 
-pub use bvh::{ClosestPoint, MeshIndex};
+pub use bvh::{ClosestPoint, MeshIndex, Shell};
 pub use rfta_geom::TriMesh;
 pub use sample::{SurfaceSample, sample_surface};
 pub use topology::Topology;

@@ -2,7 +2,7 @@
 
 use proptest::prelude::*;
 use rfta_geom::{TriMesh, glam::DVec3, kernels, rng::Rng, shapes};
-use rfta_mesh::{MeshIndex, Topology, sample_surface};
+use rfta_mesh::{MeshIndex, Shell, Topology, sample_surface};
 
 fn brute_closest(mesh: &TriMesh, p: DVec3) -> f64 {
     (0..mesh.n_faces())
@@ -212,6 +212,40 @@ proptest! {
             let brute = brute_closest(&mesh, p);
             prop_assert!((index.closest_point(p).distance_squared - brute).abs() <= 1e-15 * brute.max(1e-300));
         }
+    }
+
+    /// The shell query against the brute-force nearest distance `d`: closer than `lo` with the
+    /// exact nearest point, within `[lo, hi]`, or beyond `hi`; shells drawn around `d` so that
+    /// every answer occurs.
+    #[test]
+    fn shell_equals_brute_force_on_random_soups(seed in 0u64..10_000, n in 1usize..60) {
+        let mut rng = Rng::new(seed);
+        let (mesh, index) = random_soup(&mut rng, n);
+        let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let mut seen = [0; 3];
+        for i in 0..30 {
+            let p = r() * 3.0 - DVec3::ONE;
+            let d = brute_closest(&mesh, p).sqrt();
+            // Shell edges below, around and above the distance (a negative inner radius too).
+            let [a, b] = [r().x, r().y].map(|t| d + (t - 0.5) * 0.6);
+            let (lo, hi) = if i % 5 == 0 { (-0.1, a.abs()) } else { (a.min(b), a.max(b)) };
+            match index.shell(p, lo, hi) {
+                Shell::Closer(c) => {
+                    seen[0] += 1;
+                    prop_assert!(d < lo);
+                    prop_assert!((c.distance_squared - d * d).abs() <= 1e-15 * (d * d).max(1e-300));
+                }
+                Shell::Within => {
+                    seen[1] += 1;
+                    prop_assert!(lo <= d && d <= hi, "{lo} {d} {hi}");
+                }
+                Shell::Beyond => {
+                    seen[2] += 1;
+                    prop_assert!(d > hi);
+                }
+            }
+        }
+        prop_assert!(seen.iter().all(|&k| k > 0), "{seen:?}");
     }
 
     #[test]

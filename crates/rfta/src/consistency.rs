@@ -19,8 +19,8 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
-use rfta_geom::{SdfSamples, TriMesh};
-use rfta_mesh::{MeshIndex, Topology};
+use rfta_geom::{Grid, SdfSamples, TriMesh};
+use rfta_mesh::{MeshIndex, Shell, Topology};
 
 #[cfg(doc)]
 use crate::Error;
@@ -128,54 +128,242 @@ pub(crate) fn measure_with(
         });
     }
     let index = MeshIndex::new(mesh)?;
-    let normals =
-        (topology.is_watertight() && topology.is_manifold() && topology.is_consistently_oriented())
-            .then(|| Pseudonormals::of(mesh));
-    let per_sample = |i: usize| -> [f64; 4] {
-        let (p, s): (DVec3, f64) = (positions[i], values[i]);
-        let r = s.abs();
-        // Nothing farther than the gap margin matters for the distances: the bound lets the
-        // search prune almost every box (the mesh is about |s| away).
-        let reach = r.min(clamp) + GAP_MARGIN * h;
-        let near = index.closest_point_within(p, reach * reach);
-        let d = near
-            .as_ref()
-            .map_or(f64::INFINITY, |c| c.distance_squared.sqrt());
-        let entry = r.min(clamp) - d;
-        let entered = entry > ENTER_MARGIN * h;
-        let gap = r < clamp && d > r + GAP_MARGIN * h;
-        let sign_error = r > SIGN_MARGIN * h && {
-            // On a closed, manifold, consistently oriented mesh the pseudonormal of the nearest
-            // feature tells the side exactly; elsewhere (or on the mesh) the winding number does.
-            let side = match (&normals, &near) {
-                (Some(n), Some(c)) if c.distance_squared > 0.0 => {
-                    let dot = (p - c.point).dot(n.at(mesh, c));
-                    (dot != 0.0).then_some(dot < 0.0)
-                }
-                _ => None,
-            };
-            let inside = side.unwrap_or_else(|| index.winding_number(p) > 0.5);
-            inside != (s < 0.0)
-        };
-        [
-            f64::from(u8::from(sign_error)),
-            f64::from(u8::from(entered)),
-            f64::from(u8::from(gap)),
-            entry.max(0.0) / h.max(f64::MIN_POSITIVE),
-        ]
+    let closed =
+        topology.is_watertight() && topology.is_manifold() && topology.is_consistently_oriented();
+    let normals = closed.then(|| Pseudonormals::of(mesh));
+    let check = Check {
+        mesh,
+        index: &index,
+        normals: normals.as_ref(),
+        h,
+        clamp,
     };
-    let found = (0..positions.len()).into_par_iter().map(per_sample).reduce(
-        || [0.0; 4],
-        |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3].max(b[3])],
-    );
+    let found = match (samples.as_grid(), &normals) {
+        (Some(grid), Some(_)) => check.grid(grid, values),
+        _ => check.each(&positions, values),
+    };
     Ok(Consistency {
         samples: positions.len(),
         spacing: h,
-        sign_errors: found[0] as usize,
-        entered: found[1] as usize,
-        gaps: found[2] as usize,
-        deepest_entry: found[3],
+        sign_errors: found.sign_errors,
+        entered: found.entered,
+        gaps: found.gaps,
+        deepest_entry: found.deepest_entry,
     })
+}
+
+/// One mesh against samples: the two ways of counting.
+struct Check<'a> {
+    mesh: &'a TriMesh,
+    index: &'a MeshIndex,
+    /// Present when the mesh is closed, manifold and consistently oriented.
+    normals: Option<&'a Pseudonormals>,
+    h: f64,
+    clamp: f64,
+}
+
+/// Counts over samples, summed in any order to the same result.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Counts {
+    sign_errors: usize,
+    entered: usize,
+    gaps: usize,
+    deepest_entry: f64,
+}
+
+impl Counts {
+    fn add(self, o: Counts) -> Counts {
+        Counts {
+            sign_errors: self.sign_errors + o.sign_errors,
+            entered: self.entered + o.entered,
+            gaps: self.gaps + o.gaps,
+            deepest_entry: self.deepest_entry.max(o.deepest_entry),
+        }
+    }
+}
+
+/// How far the mesh is from one sample, as far as the margins need it.
+struct Distance {
+    entered: bool,
+    gap: bool,
+    /// `min(|s|, clamp) - d` over `h` when positive, else 0.
+    entry: f64,
+    /// A radius about the sample that no point of the mesh is nearer than (the exact distance
+    /// when the sphere is entered, the margin's bound otherwise).
+    empty: f64,
+}
+
+impl Check<'_> {
+    /// The distance part of the check, by a shell query: exact only where the sphere is entered.
+    fn distance(&self, p: DVec3, s: f64) -> Distance {
+        let (r, h) = (s.abs().min(self.clamp), self.h);
+        let (lo, hi) = (r - ENTER_MARGIN * h, r + GAP_MARGIN * h);
+        match self.index.shell(p, lo, hi) {
+            Shell::Closer(c) => {
+                let d = c.distance_squared.sqrt();
+                Distance {
+                    entered: true,
+                    gap: false,
+                    entry: (r - d) / h.max(f64::MIN_POSITIVE),
+                    empty: d,
+                }
+            }
+            Shell::Within => Distance {
+                entered: false,
+                gap: false,
+                entry: 0.0,
+                empty: lo.max(0.0),
+            },
+            Shell::Beyond => Distance {
+                entered: false,
+                gap: s.abs() < self.clamp,
+                entry: 0.0,
+                empty: hi,
+            },
+        }
+    }
+
+    /// Every sample on its own: one nearest-point query within the gap margin, the side by the
+    /// pseudonormal of the nearest feature where the mesh is closed, manifold and consistently
+    /// oriented, else (or on the mesh) by the winding number. A pseudonormal can be wrong where
+    /// faces fold over (the mesh intersects itself there), so a sign error it finds is confirmed
+    /// by the winding number.
+    fn each(&self, positions: &[DVec3], values: &[f64]) -> Counts {
+        let (h, clamp) = (self.h, self.clamp);
+        (0..positions.len())
+            .into_par_iter()
+            .map(|i| {
+                let (p, s) = (positions[i], values[i]);
+                let r = s.abs().min(clamp);
+                // Nothing farther than the gap margin matters for the distances: the bound lets
+                // the search prune almost every box (the mesh is about |s| away).
+                let reach = r + GAP_MARGIN * h;
+                let near = self.index.closest_point_within(p, reach * reach);
+                let d = near
+                    .as_ref()
+                    .map_or(f64::INFINITY, |c| c.distance_squared.sqrt());
+                let entry = r - d;
+                let by_winding = || self.index.winding_number(p) > 0.5;
+                let sign_error = s.abs() > SIGN_MARGIN * h && {
+                    let side = match (self.normals, &near) {
+                        (Some(n), Some(c)) if c.distance_squared > 0.0 => {
+                            let dot = (p - c.point).dot(n.at(self.mesh, c));
+                            (dot != 0.0).then_some(dot < 0.0)
+                        }
+                        _ => None,
+                    };
+                    let wrong = |inside: bool| inside != (s < 0.0);
+                    match side {
+                        Some(inside) => wrong(inside) && wrong(by_winding()),
+                        None => wrong(by_winding()),
+                    }
+                };
+                Counts {
+                    sign_errors: usize::from(sign_error),
+                    entered: usize::from(entry > ENTER_MARGIN * h),
+                    gaps: usize::from(s.abs() < clamp && d > s.abs() + GAP_MARGIN * h),
+                    deepest_entry: entry.max(0.0) / h.max(f64::MIN_POSITIVE),
+                }
+            })
+            .reduce(Counts::default, Counts::add)
+    }
+
+    /// Samples on a grid against a closed mesh. The side of the mesh is the same all along a
+    /// segment that does not meet it, and no point of the mesh is nearer to a sample than its
+    /// [`Distance::empty`] radius: two neighbouring samples whose empty balls together cover the
+    /// segment between them are on the same side. The side is computed once per group of samples
+    /// so joined (the far samples form a few large groups), by the union of those segments.
+    fn grid(&self, grid: &Grid, values: &[f64]) -> Counts {
+        let distances: Vec<Distance> = (0..grid.len())
+            .into_par_iter()
+            .map(|i| self.distance(grid.position(i), values[i]))
+            .collect();
+        let mut groups = Groups::new(grid.len());
+        let [nx, ny, nz] = grid.dims();
+        let step = grid.spacing();
+        for i in 0..nx {
+            for j in 0..ny {
+                for k in 0..nz {
+                    let a = grid.index(i, j, k);
+                    let mut join = |b: usize, gap: f64| {
+                        if distances[a].empty + distances[b].empty > gap {
+                            groups.join(a, b);
+                        }
+                    };
+                    if i + 1 < nx {
+                        join(grid.index(i + 1, j, k), step.x);
+                    }
+                    if j + 1 < ny {
+                        join(grid.index(i, j + 1, k), step.y);
+                    }
+                    if k + 1 < nz {
+                        join(grid.index(i, j, k + 1), step.z);
+                    }
+                }
+            }
+        }
+        let roots = groups.roots();
+        // The side of each group at its first sample, by the winding number (a few thousand
+        // groups at 129^3).
+        let inside: Vec<bool> = (0..grid.len())
+            .into_par_iter()
+            .map(|i| roots[i] as usize == i && self.index.winding_number(grid.position(i)) > 0.5)
+            .collect();
+        (0..grid.len())
+            .into_par_iter()
+            .map(|i| {
+                let d = &distances[i];
+                Counts {
+                    sign_errors: usize::from(
+                        values[i].abs() > SIGN_MARGIN * self.h
+                            && inside[roots[i] as usize] != (values[i] < 0.0),
+                    ),
+                    entered: usize::from(d.entered),
+                    gaps: usize::from(d.gap),
+                    deepest_entry: d.entry,
+                }
+            })
+            .reduce(Counts::default, Counts::add)
+    }
+}
+
+/// Disjoint sets of indices (union-find), each named by its smallest member.
+struct Groups {
+    parent: Vec<u32>,
+}
+
+impl Groups {
+    fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n as u32).collect(),
+        }
+    }
+
+    fn find(&mut self, mut a: usize) -> usize {
+        while self.parent[a] as usize != a {
+            // Path halving.
+            let up = self.parent[self.parent[a] as usize];
+            self.parent[a] = up;
+            a = up as usize;
+        }
+        a
+    }
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.parent[ra.max(rb)] = ra.min(rb) as u32;
+        }
+    }
+
+    /// Each index's group, by its smallest member.
+    fn roots(mut self) -> Vec<u32> {
+        for a in 0..self.parent.len() {
+            let r = self.find(a);
+            self.parent[a] = r as u32;
+        }
+        self.parent
+    }
 }
 
 /// Angle-weighted pseudonormals of a closed mesh's vertices and edges (Bærentzen and Aanæs, "Signed
@@ -298,6 +486,64 @@ mod tests {
         );
         assert_eq!((c.sign_errors, c.entered, c.gaps), (wrong, entered, gaps));
         assert!((c.deepest_entry - 0.37).abs() < 0.01, "{}", c.deepest_entry);
+    }
+
+    /// The grid's shortcut (sides by groups of samples joined through their empty balls) counts
+    /// as checking every sample on its own does, on closed meshes that disagree with the samples
+    /// in every way: shifted (sign errors, entered spheres, gaps on either side), with a spurious
+    /// ball among the outside samples and a cavity inside the shape (each a component of its own),
+    /// and a coarse torus whose hole and tube are far from the ball's samples.
+    #[test]
+    fn groups_of_grid_samples_count_as_each_sample_does() {
+        let samples = ball_grid();
+        let shifted = |m: TriMesh, by: DVec3| TriMesh {
+            vertices: m.vertices.iter().map(|v| *v + by).collect(),
+            ..m
+        };
+        let union = |parts: Vec<TriMesh>| {
+            let mut out = TriMesh::default();
+            for m in parts {
+                let base = out.vertices.len() as u32;
+                out.vertices.extend(&m.vertices);
+                out.faces
+                    .extend(m.faces.iter().map(|f| f.map(|v| v + base)));
+            }
+            out
+        };
+        let mut cavity = shapes::icosphere(0.2, 3);
+        cavity.flip();
+        for mesh in [
+            shifted(shapes::icosphere(0.5, 4), DVec3::new(0.13, -0.06, 0.02)),
+            union(vec![
+                shapes::icosphere(0.5, 4),
+                shifted(shapes::icosphere(0.15, 3), DVec3::new(0.7, 0.1, -0.2)),
+                cavity,
+            ]),
+            shapes::torus(0.55, 0.2, 24, 12),
+        ] {
+            let topology = Topology::of(&mesh);
+            assert!(topology.is_watertight() && topology.is_consistently_oriented());
+            let index = MeshIndex::new(&mesh).expect("index");
+            let normals = Pseudonormals::of(&mesh);
+            let check = Check {
+                mesh: &mesh,
+                index: &index,
+                normals: Some(&normals),
+                h: spacing(&samples),
+                clamp: f64::INFINITY,
+            };
+            let grid = samples.as_grid().expect("grid");
+            let by_groups = check.grid(grid, samples.values());
+            let each = check.each(&samples.positions(), samples.values());
+            assert!(
+                by_groups.sign_errors > 10 && by_groups.entered > 10,
+                "{by_groups:?}"
+            );
+            assert_eq!(by_groups.sign_errors, each.sign_errors);
+            assert_eq!(by_groups.entered, each.entered);
+            assert_eq!(by_groups.gaps, each.gaps);
+            assert!((by_groups.deepest_entry - each.deepest_entry).abs() < 1e-9);
+        }
     }
 
     #[test]
