@@ -20,6 +20,18 @@ pub(crate) fn initial_points(
     report: &mut Report,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<TangentPoints> {
+    // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
+    drawing(unit, params, unit.raster_radius(params), report, progress)
+}
+
+/// [`initial_points`] rasterizing the spheres smaller than `reach`.
+fn drawing(
+    unit: &UnitBox,
+    params: &Params,
+    reach: f64,
+    report: &mut Report,
+    progress: &mut (dyn FnMut(Stage) + Send),
+) -> Result<TangentPoints> {
     progress(Stage::Initial);
     let t = Instant::now();
     let n = unit.len();
@@ -42,18 +54,27 @@ pub(crate) fn initial_points(
     report.non_negative = pos.len();
     let mut parts = Vec::new();
     let mut raster_time = std::time::Duration::ZERO;
+    let drawn = |i: usize| unit.spheres[i].radius < reach;
     for (negative, set) in [(false, &pos), (true, &neg)] {
         if set.is_empty() {
             continue;
         }
-        let c: Vec<DVec3> = set.iter().map(|&i| unit.centers[i as usize]).collect();
-        let r: Vec<f64> = set
+        let draw: Vec<usize> = set
             .iter()
-            .map(|&i| unit.spheres[i as usize].radius)
+            .map(|&i| i as usize)
+            .filter(|&i| drawn(i))
             .collect();
+        let c: Vec<DVec3> = draw.iter().map(|&i| unit.centers[i]).collect();
+        let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
         let raster = params.raster_params(res, negative);
         let t_raster = Instant::now();
-        let empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+        let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+        if draw.len() < set.len() {
+            // Where the drawn spheres end and the larger ones would begin.
+            empty
+                .points
+                .retain(|&w| unit.nearest_sample(w).is_none_or(drawn));
+        }
         raster_time += t_raster.elapsed();
         report.empty_space_points += empty.points.len();
         let batch = draw_batch(
@@ -126,5 +147,42 @@ fn merge_by_owner(parts: Vec<TangentPoints>) -> TangentPoints {
         owners: all.iter().map(|e| e.0).collect(),
         points: all.iter().map(|e| e.1).collect(),
         normals: all.iter().map(|e| e.2).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rfta_geom::{Grid, SdfSamples};
+
+    /// A torus (radii 0.5 and 0.2) on a 41^3 grid over [-1, 1]^3: spacing 0.05, so spheres from
+    /// 0.45 on (9 spacings, 3 owner radii) are not drawn, a third of the samples. The initial
+    /// points are the same as with every sphere drawn, and with spheres up to 1 owner radius
+    /// drawn they are not.
+    #[test]
+    fn drawing_the_near_spheres_gives_the_points_of_drawing_all() {
+        let grid = Grid::cube(40, -1.0, 1.0).expect("grid");
+        let values: Vec<f64> = (0..grid.len())
+            .map(|i| {
+                let p = grid.position(i);
+                let ring = (p.x * p.x + p.y * p.y).sqrt() - 0.5;
+                (ring * ring + p.z * p.z).sqrt() - 0.2
+            })
+            .collect();
+        let samples = SdfSamples::grid(grid, values).expect("samples");
+        let params = Params::default();
+        let unit = UnitBox::new(&samples, None, None);
+        let reach = unit.raster_radius(&params);
+        let undrawn = unit.spheres.iter().filter(|s| s.radius >= reach).count();
+        assert!(undrawn * 4 > unit.len(), "{undrawn} of {}", unit.len());
+        let run = |reach: f64| {
+            drawing(&unit, &params, reach, &mut Report::default(), &mut |_| {}).expect("points")
+        };
+        let all = run(f64::INFINITY);
+        let near = run(reach);
+        assert!(all.len() > 1000, "{}", all.len());
+        assert_eq!(near.owners, all.owners);
+        assert_eq!(near.points, all.points);
+        assert_ne!(run(unit.owner_radius(&params)).points, all.points);
     }
 }

@@ -1,9 +1,9 @@
 //! Step 1: the samples as spheres in the reference's unit box.
 
 use rfta_geom::glam::DVec3;
-use rfta_geom::{SdfSamples, Sphere};
+use rfta_geom::{Grid, SdfSamples, Sphere};
 
-use crate::Params;
+use crate::{Params, RASTER_REACH};
 
 /// The samples moved into the unit box as the reference does (subtract the per-axis minimum,
 /// divide by the largest extent), as spheres of radius `|s|` (times the noise shrink
@@ -21,8 +21,8 @@ pub(crate) struct UnitBox {
     pub(crate) clamp: f64,
     /// The sample spacing in the samples' coordinates ([`sample_spacing`]).
     pub(crate) input_spacing: f64,
-    /// The samples lie on a grid (their spacing is uniform).
-    grid: bool,
+    /// The samples' grid in the unit box, when they lie on one.
+    grid: Option<Grid>,
     /// The noise shrink of the radii ([`crate::Report::radius_scale`]; 1: none).
     shrink: f64,
 }
@@ -65,7 +65,9 @@ impl UnitBox {
             spheres,
             clamp: cap,
             input_spacing: sample_spacing(samples),
-            grid: samples.as_grid().is_some(),
+            grid: samples.as_grid().and_then(|g| {
+                Grid::new(g.dims(), (g.origin() - trans) / scale, g.spacing() / scale).ok()
+            }),
             shrink,
         }
     }
@@ -110,10 +112,25 @@ impl UnitBox {
     /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
     pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
         let band = match params.owner_band {
-            Some(k) if self.grid => k * self.spacing(),
+            Some(k) if self.grid.is_some() => k * self.spacing(),
             _ => f64::INFINITY,
         };
         self.clamp.min(band)
+    }
+
+    /// Spheres at least this large are not rasterized ([`RASTER_REACH`] owner radii; none
+    /// without an owner band).
+    pub(crate) fn raster_radius(&self, params: &Params) -> f64 {
+        RASTER_REACH * self.owner_radius(params)
+    }
+
+    /// The sample nearest to a unit-box point, on grids.
+    pub(crate) fn nearest_sample(&self, p: DVec3) -> Option<usize> {
+        let g = self.grid.as_ref()?;
+        let t = (p - g.origin()) / g.spacing();
+        let dims = g.dims();
+        let at = |a: usize| (t[a].round().max(0.0) as usize).min(dims[a] - 1);
+        Some(g.index(at(0), at(1), at(2)))
     }
 
     /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
