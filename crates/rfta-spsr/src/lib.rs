@@ -271,6 +271,14 @@ pub const SIDE_PASSES: usize = 4;
 /// function only approximately, and a point right at the iso-value is on neither side.
 pub const SIDE_MARGIN: f64 = 0.02;
 
+/// Between the first solve and the last, only the side points within this of being wrong after
+/// the first solve (in the indicator's units, beyond [`SIDE_MARGIN`]) are evaluated again; the
+/// solve whose surface is returned is checked at every side point. A re-solve changes the
+/// function near the points it adds, which lie near the surface; far from it the indicator stays
+/// near its far value (at 129^3 samples of a shape, 2,071 of 2.1 million side points are within
+/// 0.1 after the first solve, 2.0 million within 0.3).
+pub const SIDE_RECHECK: f64 = 0.1;
+
 /// A wrong side point is screened toward the iso-value plus (inside) or minus (outside) this: a
 /// target just past the surface moves it no farther than needed (measured on the Reach for the
 /// Arcs dev set, docs/faithfulness.md: targets of 1/2 past it, the indicator's own values,
@@ -476,6 +484,8 @@ fn run(
     // Per side point, its constraint's index once it has one.
     let mut active: Vec<Option<u32>> = vec![None; sides.len()];
     let mut side_errors = Vec::new();
+    // The side points the re-solves between the first and the last look at again.
+    let mut recheck: Option<Vec<usize>> = None;
     let mut system_time = t1.elapsed();
     let mut solve_time = Duration::ZERO;
     // The first solve's solution and iso-value, kept while re-solves run.
@@ -517,19 +527,42 @@ fn run(
             solve_time += t2.elapsed();
             break (sol, iso);
         }
-        let wrong: Vec<usize> = sides
-            .par_iter()
-            .enumerate()
-            .filter(|(_, (p, inside))| {
-                let f = at(*p);
-                if *inside {
-                    f < iso + SIDE_MARGIN
+        // How far each side point is on its side beyond the margin (negative: wrong).
+        let slack = |i: usize| {
+            let (p, inside) = sides[i];
+            let f = at(p);
+            if inside {
+                f - iso - SIDE_MARGIN
+            } else {
+                iso - SIDE_MARGIN - f
+            }
+        };
+        let every = || -> Vec<f64> { (0..sides.len()).into_par_iter().map(slack).collect() };
+        let wrong: Vec<usize> = match &recheck {
+            None => {
+                let all = every();
+                recheck = Some(
+                    (0..sides.len())
+                        .filter(|&i| all[i] < SIDE_RECHECK)
+                        .collect(),
+                );
+                (0..sides.len()).filter(|&i| all[i] < 0.0).collect()
+            }
+            Some(near) => {
+                let w: Vec<usize> = near
+                    .par_iter()
+                    .copied()
+                    .filter(|&i| slack(i) < 0.0)
+                    .collect();
+                if last || w.is_empty() {
+                    // The surface returned: its count over every side point.
+                    let all = every();
+                    (0..sides.len()).filter(|&i| all[i] < 0.0).collect()
                 } else {
-                    f > iso - SIDE_MARGIN
+                    w
                 }
-            })
-            .map(|(i, _)| i)
-            .collect();
+            }
+        };
         side_errors.push(wrong.len());
         solve_time += t2.elapsed();
         if last || wrong.is_empty() {
