@@ -108,7 +108,8 @@ pub(crate) struct Tuning {
     #[arg(long, value_enum, default_value_t = Gpu::Off)]
     gpu: Gpu,
     /// Closed islands smaller than this many sample spacings across stay only where a sample
-    /// inside them witnesses them (0 keeps all; default: the library's `Params::min_island`).
+    /// witnesses them, inside them or touching them where the rest of the mesh leaves a gap (0
+    /// keeps all; default: the library's `Params::min_island`).
     #[arg(long)]
     min_island: Option<f64>,
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency

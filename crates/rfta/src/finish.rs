@@ -45,10 +45,21 @@ pub(crate) fn finish(
     if let Some(all) = rounds.all {
         let _ = tree.set(all);
     }
+    // The largest component in the unit box, indexed on first use.
+    let main = OnceLock::new();
     let (kept, removed) = remove_islands(
         &mesh,
         |faces| inverted_and_unenclosed(&mesh, faces),
-        |faces, bounds| judge(unit, params, &tree, &mesh, faces, bounds),
+        |faces, bounds, largest| {
+            let main = main.get_or_init(|| {
+                let part = TriMesh {
+                    vertices: mesh.vertices.iter().map(|&v| unit.to_unit(v)).collect(),
+                    faces: largest.iter().map(|&f| mesh.faces[f]).collect(),
+                };
+                rfta_mesh::MeshIndex::new(&part).ok()
+            });
+            judge(unit, params, &tree, main.as_ref(), &mesh, faces, bounds)
+        },
     );
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
@@ -263,8 +274,9 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
 /// Why a component of the mesh goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Island {
-    /// Its bounding-box diagonal is below [`Params::min_island`] spacings and it encloses no
-    /// sample of the sign its orientation gives its inside: nothing witnesses it.
+    /// Its bounding-box diagonal is below [`Params::min_island`] spacings, it encloses no sample
+    /// of the sign its orientation gives its inside, and no sample's sphere that the largest
+    /// component leaves a gap at reaches it: nothing witnesses it.
     Small,
     /// The samples contradict it: every vertex lies inside a sample sphere; or it faces inward
     /// with no other component around it.
@@ -306,11 +318,13 @@ fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
 }
 
 /// The verdict on one component (`faces` of `mesh`, in the samples' coordinates, within
-/// `bounds`); `tree` holds every sample sphere, built on first use.
+/// `bounds`); `tree` holds every sample sphere, built on first use; `main` indexes the largest
+/// component in the unit box.
 fn judge(
     unit: &UnitBox,
     params: &Params,
     tree: &OnceLock<SphereTree>,
+    main: Option<&rfta_mesh::MeshIndex>,
     mesh: &TriMesh,
     faces: &[usize],
     bounds: Aabb,
@@ -331,8 +345,10 @@ fn judge(
         return Some(Island::Unsupported);
     }
     // A small closed component stands for a solid (outward) or a cavity (inward): some sample
-    // inside it must say so, however small it is.
-    if diag < params.min_island * h {
+    // inside it must say so, however small it is, or some sample's sphere must reach it and no
+    // farther part of the surface: a thin part between the samples, which no sample lies in,
+    // is where the spheres around it touch (without it they would have gaps).
+    if diag < params.min_island * h && !closes_gap(unit, tree, main, mesh, &vertices) {
         let supported = (0..unit.len()).any(|i| {
             let p = unit.to_input(unit.centers[i]);
             if !bounds.contains(p) {
@@ -356,14 +372,50 @@ fn judge(
     None
 }
 
+/// Whether some unclamped sample's sphere comes within [`consistency::GAP_MARGIN`] spacings of
+/// a vertex of the component while `main` (the largest component) is farther from the sample
+/// than that: without the component, the sample would have a gap ([`crate::Consistency::gaps`]).
+fn closes_gap(
+    unit: &UnitBox,
+    tree: &SphereTree,
+    main: Option<&rfta_mesh::MeshIndex>,
+    mesh: &TriMesh,
+    vertices: &[u32],
+) -> bool {
+    let margin = consistency::GAP_MARGIN * unit.spacing();
+    let mut near = Vec::new();
+    let mut reached = Vec::new();
+    for &v in vertices {
+        tree.spheres_within_into(
+            unit.to_unit(mesh.vertices[v as usize]),
+            margin,
+            None,
+            &mut near,
+        );
+        reached.extend_from_slice(&near);
+    }
+    reached.sort_unstable();
+    reached.dedup();
+    reached.iter().any(|&i| {
+        let r = unit.values[i as usize].abs();
+        let reach = r + margin;
+        r < unit.clamp
+            && main.is_none_or(|m| {
+                m.closest_point_within(unit.centers[i as usize], reach * reach)
+                    .is_none()
+            })
+    })
+}
+
 /// Removes the connected components (by shared vertices) that `unsupported` condemns (given their
 /// faces; unless it condemns all), then those other than the largest remaining (by faces) that
-/// `verdict` condemns, given their faces and bounding box; unused vertices are dropped. Returns
+/// `verdict` condemns, given their faces, bounding box and the largest's faces; unused vertices
+/// are dropped. Returns
 /// the mesh and the number removed for each [`Island`] reason (`unsupported`: unsupported).
 fn remove_islands(
     mesh: &TriMesh,
     unsupported: impl Fn(&[usize]) -> bool,
-    verdict: impl Fn(&[usize], Aabb) -> Option<Island>,
+    verdict: impl Fn(&[usize], Aabb, &[usize]) -> Option<Island>,
 ) -> (TriMesh, [usize; 2]) {
     let n = mesh.vertices.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -421,7 +473,7 @@ fn remove_islands(
             if c == largest {
                 return true;
             }
-            match verdict(&faces_of[c], bounds[c]) {
+            match verdict(&faces_of[c], bounds[c], &faces_of[largest]) {
                 Some(why) => {
                     removed[why as usize] += 1;
                     false
@@ -562,7 +614,7 @@ mod tests {
         let doomed = ball(DVec3::new(0.0, 3.0, 0.0), 0.3);
         let free = ball(DVec3::new(0.0, 0.0, 3.0), 0.3);
         let mesh = union(&[main.clone(), small, doomed, free.clone()]);
-        let verdict = |_: &[usize], b: Aabb| {
+        let verdict = |_: &[usize], b: Aabb, _: &[usize]| {
             if (b.max - b.min).length() < 0.1 {
                 Some(Island::Small)
             } else if b.contains(DVec3::new(0.0, 3.0, 0.0)) {
@@ -584,10 +636,13 @@ mod tests {
         );
         // The largest component is never judged; an empty mesh is returned as it is.
         let tiny = ball(DVec3::ZERO, 0.01);
-        let (all, removed) = remove_islands(&tiny, |_| false, |_, _| Some(Island::Small));
+        let (all, removed) = remove_islands(&tiny, |_| false, |_, _, _| Some(Island::Small));
         assert!(all == tiny && removed == [0, 0]);
-        let (empty, removed) =
-            remove_islands(&TriMesh::default(), |_| false, |_, _| Some(Island::Small));
+        let (empty, removed) = remove_islands(
+            &TriMesh::default(),
+            |_| false,
+            |_, _, _| Some(Island::Small),
+        );
         assert!(empty.faces.is_empty() && removed == [0, 0]);
     }
 
@@ -602,7 +657,7 @@ mod tests {
         let (kept, removed) = remove_islands(
             &mesh,
             |faces| inverted_and_unenclosed(&mesh, faces),
-            |_, _| None,
+            |_, _, _| None,
         );
         assert_eq!(removed, [0, 1]);
         assert_eq!(kept.faces.len(), inner.faces.len());
@@ -613,7 +668,7 @@ mod tests {
         let (kept, removed) = remove_islands(
             &hollow,
             |faces| inverted_and_unenclosed(&hollow, faces),
-            |_, _| None,
+            |_, _, _| None,
         );
         assert_eq!(removed, [0, 0]);
         assert_eq!(kept.faces.len(), hollow.faces.len());
@@ -639,11 +694,23 @@ mod tests {
         let mut cavity = ball(cavity_c, 0.05);
         cavity.flip();
         let params = Params::default();
+        // The largest component: the ball of radius 0.5, in the unit box.
         let judge_on = |s: &SdfSamples, m: &TriMesh| {
             let unit = UnitBox::new(s, None, None);
+            let mut main = ball(DVec3::ZERO, 0.5);
+            main.map_vertices(|v| unit.to_unit(v));
+            let main = rfta_mesh::MeshIndex::new(&main).expect("index");
             let faces: Vec<usize> = (0..m.faces.len()).collect();
             let bounds = Aabb::from_points(&m.vertices);
-            judge(&unit, &params, &OnceLock::new(), m, &faces, bounds)
+            judge(
+                &unit,
+                &params,
+                &OnceLock::new(),
+                Some(&main),
+                m,
+                &faces,
+                bounds,
+            )
         };
         assert_eq!(judge_on(&with_solid, &solid), None);
         // Without the small parts, the samples around them are large: inside their spheres.
@@ -658,6 +725,21 @@ mod tests {
         assert_eq!(
             judge_on(&tiny, &ball(DVec3::new(0.5, 0.05, 0.05), 0.01)),
             Some(Island::Small)
+        );
+        // A thin part between the samples, no sample inside it (the nearest is 0.087 from its
+        // centre): the samples around it touch it and are far from the big ball, so it stays.
+        // A ball as large where the samples see nothing but the big ball is inside their spheres.
+        let thin_c = DVec3::new(0.75, 0.05, 0.05);
+        let thin = samples(&|p| ball_sdf(p).min((p - thin_c).length() - 0.03));
+        assert_eq!(judge_on(&thin, &ball(thin_c, 0.03)), None);
+        assert_eq!(
+            judge_on(&plain, &ball(thin_c, 0.03)),
+            Some(Island::Unsupported)
+        );
+        // Half a spacing off the thin part, the samples' spheres reach it no more.
+        assert_eq!(
+            judge_on(&thin, &ball(thin_c + DVec3::new(0.0, -0.3, 0.0), 0.03)),
+            Some(Island::Unsupported)
         );
     }
 }

@@ -66,10 +66,12 @@ pub struct Params {
     pub owner_band: Option<f64>,
     /// Closed components (other than the largest) whose bounding-box diagonal is below this many
     /// sample spacings stay only where the samples witness them: a sample inside of the sign their
-    /// orientation gives their inside (0 keeps them all). Screened Poisson leaves small closed
-    /// islands next to outlying tangency points (the reference's outputs have them too); a thin
-    /// part the grid resolves only in pieces leaves small islands around its inside samples, and
-    /// those stay. Size alone removes nothing. Default 2.
+    /// orientation gives their inside, or a sample whose sphere reaches them while the largest
+    /// component is farther from it than its value (it would have a gap without them); 0 keeps
+    /// them all. Screened Poisson leaves small closed islands next to outlying tangency points
+    /// (the reference's outputs have them too); a thin part the grid resolves only in pieces
+    /// leaves small islands around its inside samples or between them where the samples' spheres
+    /// touch it, and those stay. Size alone removes nothing. Default 2.
     pub min_island: f64,
 }
 
