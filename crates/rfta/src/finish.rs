@@ -45,11 +45,12 @@ pub(crate) fn finish(
     if let Some(all) = rounds.all {
         let _ = tree.set(all);
     }
-    // The largest component in the unit box, indexed on first use.
-    let main = OnceLock::new();
+    let t = Instant::now();
+    // The largest component in the unit box and the whole mesh, indexed on first use.
+    let (main, whole) = (OnceLock::new(), OnceLock::new());
     let (kept, removed) = remove_islands(
         &mesh,
-        |faces| inverted_and_unenclosed(&mesh, faces),
+        |faces| inverted_and_unenclosed(&mesh, faces, &whole),
         |faces, bounds, largest| {
             let main = main.get_or_init(|| {
                 let part = TriMesh {
@@ -64,6 +65,9 @@ pub(crate) fn finish(
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
+    report
+        .timings
+        .push(("components judged".into(), t.elapsed()));
     let t = Instant::now();
     // The spheres that own points: near the surface and small, so the tree prunes well. The far
     // ones are large and tangent to the same surface, which no bound can rule out cheaply; a
@@ -78,9 +82,9 @@ pub(crate) fn finish(
         push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
     report.dents = dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
+    let t = Instant::now();
     let topology = rfta_mesh::Topology::of(&mesh);
     report.mesh = check::mesh(&mesh, &topology)?;
-    let t = Instant::now();
     report.consistency = consistency::measure_with(samples, &mesh, &topology, report.clamp)?;
     report
         .timings
@@ -286,7 +290,11 @@ enum Island {
 /// Whether the component `faces` of `mesh` faces inward (negative volume) and no other component
 /// encloses it: a cavity with no solid around it, which no bounded set of samples describes. With
 /// few samples away from the surface, screened Poisson can close such a shell far out in its box.
-fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
+fn inverted_and_unenclosed(
+    mesh: &TriMesh,
+    faces: &[usize],
+    whole: &OnceLock<Option<rfta_mesh::MeshIndex>>,
+) -> bool {
     // The divergence theorem over the component's faces (`TriMesh::signed_volume` of a part).
     let volume: f64 = faces
         .iter()
@@ -302,19 +310,18 @@ fn inverted_and_unenclosed(mesh: &TriMesh, faces: &[usize]) -> bool {
         return false;
     };
     let p = mesh.vertices[mesh.faces[first][0] as usize];
-    let mut own = vec![false; mesh.faces.len()];
-    for &f in faces {
-        own[f] = true;
-    }
-    let winding: f64 = (0..mesh.faces.len())
-        .filter(|&f| !own[f])
-        .map(|f| {
-            let [a, b, c] = mesh.triangle(f);
-            solid_angle(p, a, b, c)
-        })
-        .sum::<f64>()
-        / (4.0 * std::f64::consts::PI);
-    winding < 0.5
+    let angle = |f: usize| {
+        let [a, b, c] = mesh.triangle(f);
+        solid_angle(p, a, b, c)
+    };
+    let own: f64 = faces.iter().map(|&f| angle(f)).sum();
+    // The other components' winding number at `p`: the whole mesh's (hierarchical, the mesh
+    // indexed once) less the component's own solid angles.
+    let all = match whole.get_or_init(|| rfta_mesh::MeshIndex::new(mesh).ok()) {
+        Some(index) => index.winding_number(p),
+        None => (0..mesh.faces.len()).map(angle).sum::<f64>() / (4.0 * std::f64::consts::PI),
+    };
+    all - own / (4.0 * std::f64::consts::PI) < 0.5
 }
 
 /// The verdict on one component (`faces` of `mesh`, in the samples' coordinates, within
@@ -349,11 +356,8 @@ fn judge(
     // farther part of the surface: a thin part between the samples, which no sample lies in,
     // is where the spheres around it touch (without it they would have gaps).
     if diag < params.min_island * h && !closes_gap(unit, tree, main, mesh, &vertices) {
-        let supported = (0..unit.len()).any(|i| {
+        let supported = unit.samples_within(bounds).into_iter().any(|i| {
             let p = unit.to_input(unit.centers[i]);
-            if !bounds.contains(p) {
-                return false;
-            }
             let w: f64 = faces
                 .iter()
                 .map(|&f| {
@@ -656,7 +660,7 @@ mod tests {
         let mesh = union(&[inner.clone(), shell.clone()]);
         let (kept, removed) = remove_islands(
             &mesh,
-            |faces| inverted_and_unenclosed(&mesh, faces),
+            |faces| inverted_and_unenclosed(&mesh, faces, &OnceLock::new()),
             |_, _, _| None,
         );
         assert_eq!(removed, [0, 1]);
@@ -667,7 +671,7 @@ mod tests {
         let hollow = union(&[outer, shell, inner]);
         let (kept, removed) = remove_islands(
             &hollow,
-            |faces| inverted_and_unenclosed(&hollow, faces),
+            |faces| inverted_and_unenclosed(&hollow, faces, &OnceLock::new()),
             |_, _, _| None,
         );
         assert_eq!(removed, [0, 0]);

@@ -216,7 +216,9 @@ fn run(
         ..Report::default()
     };
     if params.check {
+        let t = std::time::Instant::now();
         check::samples(samples, params, &mut report)?;
+        report.timings.push(("input check".into(), t.elapsed()));
     }
     go_on()?;
     let unit = normalize::UnitBox::new(samples, report.clamp, report.radius_scale);

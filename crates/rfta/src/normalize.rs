@@ -133,6 +133,36 @@ impl UnitBox {
         Some(g.index(at(0), at(1), at(2)))
     }
 
+    /// The samples inside `bounds` (a box in the samples' coordinates), in index order: on grids
+    /// the nodes in the box, read off the grid; otherwise every sample tested.
+    pub(crate) fn samples_within(&self, bounds: rfta_geom::Aabb) -> Vec<usize> {
+        let lo = self.to_unit(bounds.min);
+        let hi = self.to_unit(bounds.max);
+        let inside = |i: &usize| {
+            let c = self.centers[*i];
+            c.cmpge(lo).all() && c.cmple(hi).all()
+        };
+        let Some(g) = &self.grid else {
+            return (0..self.len()).filter(inside).collect();
+        };
+        let dims = g.dims();
+        // Node ranges one node wider than the box (empty beyond the grid), each node then
+        // tested exactly.
+        let range = |a: usize| {
+            let t = |x: f64| (x - g.origin()[a]) / g.spacing()[a];
+            let first = (t(lo[a]).floor() - 1.0).max(0.0) as usize;
+            let last = (t(hi[a]).ceil() + 1.0).min(dims[a] as f64 - 1.0) as usize;
+            first..=last
+        };
+        let mut out = Vec::new();
+        for i in range(0) {
+            for j in range(1) {
+                out.extend(range(2).map(|k| g.index(i, j, k)).filter(inside));
+            }
+        }
+        out
+    }
+
     /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
     /// clamped ones).
     pub(crate) fn far_spheres(&self, params: &Params) -> usize {
@@ -162,5 +192,47 @@ pub(crate) fn sample_spacing(samples: &SdfSamples) -> f64 {
             let e = (b.max - b.min).max(DVec3::splat(1e-300));
             (e.x * e.y * e.z / samples.len().max(1) as f64).cbrt()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rfta_geom::{Aabb, Grid};
+
+    /// The grid's shortcut finds exactly the samples a scan over all of them finds, for boxes
+    /// inside, across and beyond the grid.
+    #[test]
+    fn samples_within_a_box_are_those_a_scan_finds() {
+        let grid = Grid::new(
+            [9, 7, 5],
+            DVec3::new(-1.0, 0.5, 2.0),
+            DVec3::new(0.25, 0.3, 0.5),
+        )
+        .expect("grid");
+        let values = (0..grid.len()).map(|i| i as f64 * 0.01 - 0.1).collect();
+        let samples = SdfSamples::grid(grid, values).expect("samples");
+        let unit = UnitBox::new(&samples, None, None);
+        let mut rng = rfta_geom::rng::Rng::new(5);
+        let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let mut found = 0;
+        for _ in 0..500 {
+            let (a, b) = (r() * 4.0 - DVec3::splat(1.5), r() * 4.0 - DVec3::splat(1.5));
+            let bounds = Aabb::from_points(&[
+                a + DVec3::new(-1.0, 0.5, 2.0),
+                b + DVec3::new(-1.0, 0.5, 2.0),
+            ]);
+            let scan: Vec<usize> = (0..samples.len())
+                .filter(|&i| {
+                    let c = unit.centers[i];
+                    c.cmpge(unit.to_unit(bounds.min)).all()
+                        && c.cmple(unit.to_unit(bounds.max)).all()
+                })
+                .collect();
+            found += scan.len();
+            assert_eq!(unit.samples_within(bounds), scan);
+        }
+        assert!(found > 1000, "{found}");
+        assert!(unit.samples_within(Aabb::EMPTY).is_empty());
     }
 }
