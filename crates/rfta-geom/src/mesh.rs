@@ -128,4 +128,13 @@ impl TriMesh {
             f.swap(1, 2);
         }
     }
+
+    /// Adds `other`'s vertices and faces (its faces renumbered after this mesh's vertices): the
+    /// union of the two as one mesh with separate components.
+    pub fn append(&mut self, other: &TriMesh) {
+        let base = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.faces
+            .extend(other.faces.iter().map(|f| f.map(|v| v + base)));
+    }
 }

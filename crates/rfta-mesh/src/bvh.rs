@@ -217,19 +217,24 @@ impl MeshIndex {
                     }
                 }
             } else {
-                let dl = self.nodes[node.a as usize].bounds.distance_squared(p);
-                let dr = self.nodes[node.b as usize].bounds.distance_squared(p);
-                // Push the farther child first so the nearer one is visited next.
-                if dl <= dr {
-                    stack.push((node.b, dr));
-                    stack.push((node.a, dl));
-                } else {
-                    stack.push((node.a, dl));
-                    stack.push((node.b, dr));
-                }
+                self.push_children(node, p, &mut stack);
             }
         }
         best
+    }
+
+    /// Pushes an inner node's children with their squared distances to `p`, the farther first so
+    /// that the nearer one is visited next.
+    fn push_children(&self, node: &Node, p: DVec3, stack: &mut Vec<(u32, f64)>) {
+        let dl = self.nodes[node.a as usize].bounds.distance_squared(p);
+        let dr = self.nodes[node.b as usize].bounds.distance_squared(p);
+        if dl <= dr {
+            stack.push((node.b, dr));
+            stack.push((node.a, dl));
+        } else {
+            stack.push((node.a, dl));
+            stack.push((node.b, dr));
+        }
     }
 
     /// Where the mesh lies relative to the spherical shell `lo <= |x - p| <= hi` around `p`
@@ -277,15 +282,7 @@ impl MeshIndex {
                     }
                 }
             } else {
-                let dl = self.nodes[node.a as usize].bounds.distance_squared(p);
-                let dr = self.nodes[node.b as usize].bounds.distance_squared(p);
-                if dl <= dr {
-                    stack.push((node.b, dr));
-                    stack.push((node.a, dl));
-                } else {
-                    stack.push((node.a, dl));
-                    stack.push((node.b, dr));
-                }
+                self.push_children(node, p, &mut stack);
             }
         }
         match best {

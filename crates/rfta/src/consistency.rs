@@ -502,11 +502,8 @@ mod tests {
         };
         let union = |parts: Vec<TriMesh>| {
             let mut out = TriMesh::default();
-            for m in parts {
-                let base = out.vertices.len() as u32;
-                out.vertices.extend(&m.vertices);
-                out.faces
-                    .extend(m.faces.iter().map(|f| f.map(|v| v + base)));
+            for m in &parts {
+                out.append(m);
             }
             out
         };

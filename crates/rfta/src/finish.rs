@@ -579,10 +579,7 @@ mod tests {
     fn union(parts: &[TriMesh]) -> TriMesh {
         let mut out = TriMesh::default();
         for m in parts {
-            let base = out.vertices.len() as u32;
-            out.vertices.extend(&m.vertices);
-            out.faces
-                .extend(m.faces.iter().map(|f| f.map(|v| v + base)));
+            out.append(m);
         }
         out
     }
