@@ -36,12 +36,14 @@
 mod bvh;
 mod sample;
 mod topology;
+mod union_find;
 mod winding;
 
 pub use bvh::{ClosestPoint, MeshIndex, Shell};
 pub use rfta_geom::TriMesh;
 pub use sample::{SurfaceSample, sample_surface};
 pub use topology::Topology;
+pub use union_find::UnionFind;
 
 /// What can go wrong building a mesh index.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -5,6 +5,8 @@ use std::collections::HashMap;
 
 use rfta_geom::TriMesh;
 
+use crate::UnionFind;
+
 /// Combinatorial facts about a triangle mesh.
 ///
 /// Only vertices that some face uses count (an unused vertex would change the Euler
@@ -162,33 +164,4 @@ struct EdgeUse {
     count: u32,
     forward: i32,
     faces: Vec<u32>,
-}
-
-struct UnionFind {
-    parent: Vec<usize>,
-}
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        Self {
-            parent: (0..n).collect(),
-        }
-    }
-
-    fn find(&mut self, mut x: usize) -> usize {
-        while self.parent[x] != x {
-            self.parent[x] = self.parent[self.parent[x]];
-            x = self.parent[x];
-        }
-        x
-    }
-
-    fn union(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            // Smaller index as root keeps the structure independent of edge visiting order.
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            self.parent[hi] = lo;
-        }
-    }
 }

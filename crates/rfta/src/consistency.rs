@@ -20,7 +20,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Grid, SdfSamples, TriMesh};
-use rfta_mesh::{MeshIndex, Shell, Topology};
+use rfta_mesh::{MeshIndex, Shell, Topology, UnionFind};
 
 #[cfg(doc)]
 use crate::Error;
@@ -130,7 +130,9 @@ pub(crate) fn measure_with(
     let index = MeshIndex::new(mesh)?;
     let closed =
         topology.is_watertight() && topology.is_manifold() && topology.is_consistently_oriented();
-    let normals = closed.then(|| Pseudonormals::of(mesh));
+    let on_grid = samples.as_grid().filter(|_| closed);
+    // The pseudonormals serve only the per-sample check.
+    let normals = (closed && on_grid.is_none()).then(|| Pseudonormals::of(mesh));
     let check = Check {
         mesh,
         index: &index,
@@ -138,9 +140,9 @@ pub(crate) fn measure_with(
         h,
         clamp,
     };
-    let found = match (samples.as_grid(), &normals) {
-        (Some(grid), Some(_)) => check.grid(grid, values),
-        _ => check.each(&positions, values),
+    let found = match on_grid {
+        Some(grid) => check.grid(grid, values),
+        None => check.each(&positions, values),
     };
     Ok(Consistency {
         samples: positions.len(),
@@ -278,7 +280,7 @@ impl Check<'_> {
             .into_par_iter()
             .map(|i| self.distance(grid.position(i), values[i]))
             .collect();
-        let mut groups = Groups::new(grid.len());
+        let mut groups = UnionFind::new(grid.len());
         let [nx, ny, nz] = grid.dims();
         let step = grid.spacing();
         for i in 0..nx {
@@ -287,7 +289,7 @@ impl Check<'_> {
                     let a = grid.index(i, j, k);
                     let mut join = |b: usize, gap: f64| {
                         if distances[a].empty + distances[b].empty > gap {
-                            groups.join(a, b);
+                            groups.union(a, b);
                         }
                     };
                     if i + 1 < nx {
@@ -302,12 +304,12 @@ impl Check<'_> {
                 }
             }
         }
-        let roots = groups.roots();
+        let roots: Vec<usize> = (0..grid.len()).map(|i| groups.find(i)).collect();
         // The side of each group at its first sample, by the winding number (a few thousand
         // groups at 129^3).
         let inside: Vec<bool> = (0..grid.len())
             .into_par_iter()
-            .map(|i| roots[i] as usize == i && self.index.winding_number(grid.position(i)) > 0.5)
+            .map(|i| roots[i] == i && self.index.winding_number(grid.position(i)) > 0.5)
             .collect();
         (0..grid.len())
             .into_par_iter()
@@ -316,7 +318,7 @@ impl Check<'_> {
                 Counts {
                     sign_errors: usize::from(
                         values[i].abs() > SIGN_MARGIN * self.h
-                            && inside[roots[i] as usize] != (values[i] < 0.0),
+                            && inside[roots[i]] != (values[i] < 0.0),
                     ),
                     entered: usize::from(d.entered),
                     gaps: usize::from(d.gap),
@@ -324,45 +326,6 @@ impl Check<'_> {
                 }
             })
             .reduce(Counts::default, Counts::add)
-    }
-}
-
-/// Disjoint sets of indices (union-find), each named by its smallest member.
-struct Groups {
-    parent: Vec<u32>,
-}
-
-impl Groups {
-    fn new(n: usize) -> Self {
-        Self {
-            parent: (0..n as u32).collect(),
-        }
-    }
-
-    fn find(&mut self, mut a: usize) -> usize {
-        while self.parent[a] as usize != a {
-            // Path halving.
-            let up = self.parent[self.parent[a] as usize];
-            self.parent[a] = up;
-            a = up as usize;
-        }
-        a
-    }
-
-    fn join(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.parent[ra.max(rb)] = ra.min(rb) as u32;
-        }
-    }
-
-    /// Each index's group, by its smallest member.
-    fn roots(mut self) -> Vec<u32> {
-        for a in 0..self.parent.len() {
-            let r = self.find(a);
-            self.parent[a] = r as u32;
-        }
-        self.parent
     }
 }
 

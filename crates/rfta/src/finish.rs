@@ -355,8 +355,8 @@ fn judge(
     // inside it must say so, however small it is, or some sample's sphere must reach it and no
     // farther part of the surface: a thin part between the samples, which no sample lies in,
     // is where the spheres around it touch (without it they would have gaps).
-    if diag < params.min_island * h && !closes_gap(unit, tree, main, mesh, faces, &vertices) {
-        let supported = unit.samples_within(bounds).into_iter().any(|i| {
+    if diag < params.min_island * h {
+        let inside = unit.samples_within(bounds).into_iter().any(|i| {
             let p = unit.to_input(unit.centers[i]);
             let w: f64 = faces
                 .iter()
@@ -369,7 +369,8 @@ fn judge(
             let v = unit.values[i];
             (w > 0.5 && v < 0.0) || (w < -0.5 && v > 0.0)
         });
-        if !supported {
+        // The cheap witness first: a few samples in the box.
+        if !inside && !closes_gap(unit, tree, main, mesh, faces, &vertices) {
             return Some(Island::Small);
         }
     }
