@@ -473,7 +473,8 @@ fn run(
     let total_w: f64 = samples.iter().map(|s| s.weight).sum();
     let total_a: f64 = samples.iter().map(|s| s.area).sum();
     let alpha = params.screening * total_a / total_w;
-    let mut v = Some(solve::splat_normals(&levels, &samples));
+    let v = solve::splat_normals(&levels, &samples);
+    let down = solve::down_pass(&levels, &v);
     // Side points in the cube, with the value of their side.
     let sides: Vec<(glam::DVec3, bool)> = sides
         .iter()
@@ -500,19 +501,19 @@ fn run(
         let t1 = Instant::now();
         let systems = solve::build_systems(&levels, &samples, &constraints, params, alpha);
         let last = sides.is_empty() || side_errors.len() == SIDE_PASSES;
-        let normals = if last { v.take() } else { v.clone() }.unwrap_or_default();
         system_time += t1.elapsed();
         let t2 = Instant::now();
         let sol = match &resolve {
             Some(start) => solve::solve(
                 &levels,
                 &systems,
-                normals,
+                &v,
+                &down,
                 &resolve_params,
                 base,
                 Some(start),
             ),
-            None => solve::solve(&levels, &systems, normals, params, base, warm),
+            None => solve::solve(&levels, &systems, &v, &down, params, base, warm),
         };
         drop(systems);
         let at = |p: glam::DVec3| solve::evaluate(&levels, &sol, p, base);
@@ -599,6 +600,7 @@ fn run(
         }
     };
 
+    drop((v, down));
     let t3 = Instant::now();
     let solve::Solution { x, u } = sol;
     let mut values = extract::final_values(&levels, &u);

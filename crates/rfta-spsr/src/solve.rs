@@ -321,8 +321,8 @@ pub(crate) fn quadratic_bspline(t: f64) -> f64 {
 }
 
 /// `∫ ∇B_i · V_d` for every node of a depth, `V_d` given by same-depth coefficients.
-fn apply_g(level: &Level, sys: &LevelSystem, nbr: &[u32], v: &[DVec3]) -> Vec<f64> {
-    let t = &sys.tables.same;
+fn apply_g(level: &Level, tables: &AxisTables, nbr: &[u32], v: &[DVec3]) -> Vec<f64> {
+    let t = &tables.same;
     (0..level.nodes.len())
         .into_par_iter()
         .with_min_len(GRAIN)
@@ -717,26 +717,31 @@ pub(crate) struct Solution {
     pub u: Vec<Vec<f64>>,
 }
 
-/// The cascadic solve, coarse to fine.
-pub(crate) fn solve(
-    levels: &[Level],
-    systems: &[LevelSystem],
-    mut v: Vec<Vec<DVec3>>,
-    params: &SpsrParams,
-    base: u32,
-    warm: Option<&WarmStart>,
-) -> Solution {
+/// The normal field's share of every depth's right-hand side, with the index tables of the small
+/// depths: what the down pass of the cascadic solve computes. It depends on the octree and the
+/// normal field only, not on the screening, so the re-solves of
+/// [`crate::reconstruct_with_sides`], which add value constraints to the same octree, reuse it.
+pub(crate) struct DownPass {
+    /// `β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l` per depth.
+    beta: Vec<Vec<f64>>,
+    /// Neighbour tables of the depths with at most `KEEP_TABLES_BELOW` nodes.
+    nbr: Vec<Option<Vec<u32>>>,
+    /// Parent tables of those depths (none at depth 0).
+    parents: Vec<Option<Vec<u32>>>,
+}
+
+/// The down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l, that is each depth's own `∫ ∇B_d · V_d` plus the
+/// restriction of the finer depth's β. The own terms and the small depths' tables do not depend
+/// on each other and are built for all small depths at once; the big depths follow one at a
+/// time in the chain of restrictions.
+pub(crate) fn down_pass(levels: &[Level], v: &[Vec<DVec3>]) -> DownPass {
     let depth = levels.len() - 1;
     // Index tables of the down pass that the up pass needs again: kept for the depths small
     // enough (at most `KEEP_TABLES_BELOW` nodes, 14 MB a table), rebuilt for the big ones so that
     // the big tables exist one depth at a time.
     let small = |d: usize| levels[d].nodes.len() <= KEEP_TABLES_BELOW;
-    let mut kept_nbr: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
-    let mut kept_parents: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
-    // Down pass: β_d = ∫ ∇B_d · Σ_{l ≥ d} V_l, that is each depth's own `∫ ∇B_d · V_d` plus the
-    // restriction of the finer depth's β. The own terms and the small depths' tables do not depend
-    // on each other and are built for all small depths at once; the big depths follow one at a
-    // time in the chain of restrictions.
+    let mut nbr: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
+    let mut parents: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
     let own: Vec<Option<DownTerms>> = (0..=depth)
         .into_par_iter()
         .map(|d| {
@@ -744,52 +749,76 @@ pub(crate) fn solve(
                 return None;
             }
             let nbr = neighbor_table(&levels[d]);
-            let g = apply_g(&levels[d], &systems[d], &nbr, &v[d]);
+            let g = apply_g(&levels[d], &AxisTables::new(d as u32), &nbr, &v[d]);
             let parents = (d > 0).then(|| parent_table(&levels[d], &levels[d - 1]));
             Some(DownTerms { nbr, g, parents })
         })
         .collect();
     let mut own_g: Vec<Option<Vec<f64>>> = vec![None; depth + 1];
     for (d, o) in own.into_iter().enumerate() {
-        if let Some(DownTerms { nbr, g, parents }) = o {
-            kept_nbr[d] = Some(nbr);
+        if let Some(DownTerms {
+            nbr: n,
+            g,
+            parents: p,
+        }) = o
+        {
+            nbr[d] = Some(n);
             own_g[d] = Some(g);
-            kept_parents[d] = parents;
+            parents[d] = p;
         }
     }
     let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
     for d in (0..=depth).rev() {
         let mut b = own_g[d].take().unwrap_or_else(|| {
             let nbr = neighbor_table(&levels[d]);
-            apply_g(&levels[d], &systems[d], &nbr, &v[d])
+            apply_g(&levels[d], &AxisTables::new(d as u32), &nbr, &v[d])
         });
         if d < depth {
             let built;
-            let parents = match &kept_parents[d + 1] {
+            let fine_parents = match &parents[d + 1] {
                 Some(p) => p,
                 None => {
                     built = parent_table(&levels[d + 1], &levels[d]);
                     &built
                 }
             };
-            let r = restrict(&levels[d], &levels[d + 1], parents, &beta[d + 1]);
+            let r = restrict(&levels[d], &levels[d + 1], fine_parents, &beta[d + 1]);
             b.iter_mut().zip(&r).for_each(|(b, r)| *b += r);
         }
         beta[d] = b;
     }
+    DownPass { beta, nbr, parents }
+}
+
+/// The cascadic solve, coarse to fine (the up pass), from the normal field `v` and its down pass.
+pub(crate) fn solve(
+    levels: &[Level],
+    systems: &[LevelSystem],
+    v: &[Vec<DVec3>],
+    down: &DownPass,
+    params: &SpsrParams,
+    base: u32,
+    warm: Option<&WarmStart>,
+) -> Solution {
+    let depth = levels.len() - 1;
     let mut xs: Vec<Vec<f64>> = Vec::with_capacity(depth + 1);
     let mut us: Vec<Vec<f64>> = Vec::with_capacity(depth + 1);
     let mut w_prev: Vec<DVec3> = Vec::new();
     for d in 0..=depth {
         let level = &levels[d];
         let sys = &systems[d];
-        let mut rhs = std::mem::take(&mut beta[d]);
+        let mut rhs = down.beta[d].clone();
         // Coarser normal field and coarser solution, through exact parent-child integrals, and
         // both prolonged to this depth (they do not depend on this depth's solution).
         let (u_coarse, w_coarse) = if d > 0 {
-            let parents = kept_parents[d]
-                .take()
-                .unwrap_or_else(|| parent_table(level, &levels[d - 1]));
+            let built;
+            let parents = match &down.parents[d] {
+                Some(p) => p,
+                None => {
+                    built = parent_table(level, &levels[d - 1]);
+                    &built
+                }
+            };
             let u_prev = &us[d - 1];
             let corr: Vec<f64> = (0..level.nodes.len())
                 .into_par_iter()
@@ -797,7 +826,7 @@ pub(crate) fn solve(
                 .map(|i| {
                     let c = level.nodes[i];
                     let mut acc = 0.0;
-                    for_parents(sys, &parents, i, c, |j, ax, ay, az| {
+                    for_parents(sys, parents, i, c, |j, ax, ay, az| {
                         let (k, g) = combine(ax, ay, az);
                         let w = w_prev[j as usize];
                         acc += g[0] * w.x + g[1] * w.y + g[2] * w.z - k * u_prev[j as usize];
@@ -807,8 +836,8 @@ pub(crate) fn solve(
                 .collect();
             rhs.iter_mut().zip(&corr).for_each(|(r, c)| *r += c);
             (
-                prolong(level, &parents, u_prev),
-                prolong(level, &parents, &w_prev),
+                prolong(level, parents, u_prev),
+                prolong(level, parents, &w_prev),
             )
         } else {
             (
@@ -842,23 +871,28 @@ pub(crate) fn solve(
                 *r = 0.0;
             }
         }
-        let nbr = kept_nbr[d].take().unwrap_or_else(|| neighbor_table(level));
+        let built;
+        let nbr = match &down.nbr[d] {
+            Some(n) => n,
+            None => {
+                built = neighbor_table(level);
+                &built
+            }
+        };
         let x = if (d as u32) < base {
-            conjugate_gradients(level, sys, &nbr, &rhs, params.base_iterations, 1e-6)
+            conjugate_gradients(level, sys, nbr, &rhs, params.base_iterations, 1e-6)
         } else {
             let mut x = match warm.and_then(|w| w.start(d, level)) {
                 Some(x) => x,
                 None => vec![0.0; level.nodes.len()],
             };
-            gauss_seidel(level, sys, &nbr, &rhs, &mut x, params.iterations);
+            gauss_seidel(level, sys, nbr, &rhs, &mut x, params.iterations);
             x
         };
-        drop(nbr);
         let mut u = u_coarse;
         u.iter_mut().zip(&x).for_each(|(u, x)| *u += x);
         let mut w = w_coarse;
         w.iter_mut().zip(&v[d]).for_each(|(w, v)| *w += *v);
-        v[d] = Vec::new();
         w_prev = w;
         xs.push(x);
         us.push(u);
@@ -884,15 +918,110 @@ pub(crate) fn evaluate(levels: &[Level], sol: &Solution, p: DVec3, base: u32) ->
                 }
             }
             None => {
+                let mut any = false;
                 for (k, hk) in h.iter().enumerate() {
                     let o = corner(k);
                     let q = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
                     if let Some(j) = level.node(ic(q)) {
                         f += hk * vals[j as usize];
+                        any = true;
                     }
+                }
+                // Nodes are the corners of cells, and a cell's parent is a cell: a finer cell
+                // touching the one around `p` would have a parent sharing a corner with this
+                // one. With no corner here, no finer depth has a hat over `p`.
+                if !any {
+                    break;
                 }
             }
         }
     }
     f
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{OrientedPoints, tree};
+
+    /// A thin octree (points on a small sphere off-centre, so most of the cube is coarse) and
+    /// arbitrary coefficients: `evaluate`, which stops at the first depth without a hat over the
+    /// point, equals the sum of every hat of every depth at the point.
+    #[test]
+    fn evaluate_is_the_sum_of_all_hats() {
+        let n = 4000;
+        let dirs: Vec<DVec3> = (0..n)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let phi = i as f64 * 2.399963229728653;
+                let s = (1.0 - z * z).sqrt();
+                DVec3::new(s * phi.cos(), s * phi.sin(), z)
+            })
+            .collect();
+        let pos: Vec<DVec3> = dirs.iter().map(|d| 0.2 * *d + DVec3::splat(0.3)).collect();
+        let points = OrientedPoints::new(pos, dirs, None).unwrap();
+        let params = SpsrParams {
+            depth: 7,
+            box_scale: 3.0,
+            ..SpsrParams::default()
+        };
+        let base = 3;
+        let frame = tree::Frame::around(&points, params.box_scale).unwrap();
+        let mut samples = tree::merge(&points, &frame, params.depth);
+        tree::estimate_density(&mut samples, &params, base);
+        let levels = tree::build_levels(&samples, params.depth, base);
+        // Pseudo-random coefficients (a fixed linear congruential sequence).
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let sol = Solution {
+            x: levels
+                .iter()
+                .map(|l| l.nodes.iter().map(|_| next()).collect())
+                .collect(),
+            u: levels
+                .iter()
+                .map(|l| l.nodes.iter().map(|_| next()).collect())
+                .collect(),
+        };
+        let hat = |p: DVec3, c: [u32; 3], d: usize| {
+            let s = f64::from(1u32 << d);
+            (0..3)
+                .map(|a| (1.0 - (p[a] * s - f64::from(c[a])).abs()).max(0.0))
+                .product::<f64>()
+        };
+        let mut deep = 0;
+        for k in 0..2000 {
+            // Unit-cube points; every fourth next to a point of the cloud, where the fine depths
+            // have hats.
+            let u = DVec3::new(next() + 0.5, next() + 0.5, next() + 0.5);
+            let u = if k % 4 == 0 {
+                frame.to_unit(points.positions()[k % n] + 0.02 * (u - 0.5))
+            } else {
+                u
+            };
+            let mut sum = 0.0;
+            for (d, level) in levels.iter().enumerate().skip(base as usize) {
+                let vals = if d == base as usize {
+                    &sol.u[d]
+                } else {
+                    &sol.x[d]
+                };
+                for (i, &c) in level.nodes.iter().enumerate() {
+                    let w = hat(u, c, d);
+                    if w > 0.0 && d == levels.len() - 1 {
+                        deep += 1;
+                    }
+                    sum += w * vals[i];
+                }
+            }
+            let f = evaluate(&levels, &sol, u, base);
+            assert!((f - sum).abs() < 1e-12, "at {u}: {f} against {sum}");
+        }
+        assert!(deep > 100, "too few points reach the finest depth: {deep}");
+    }
 }
