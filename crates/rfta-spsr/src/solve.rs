@@ -948,7 +948,7 @@ mod tests {
     /// arbitrary coefficients: `evaluate`, which stops at the first depth without a hat over the
     /// point, equals the sum of every hat of every depth at the point.
     #[test]
-    fn evaluate_is_the_sum_of_all_hats() {
+    fn evaluate_is_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
         let n = 4000;
         let dirs: Vec<DVec3> = (0..n)
             .map(|i| {
@@ -959,14 +959,14 @@ mod tests {
             })
             .collect();
         let pos: Vec<DVec3> = dirs.iter().map(|d| 0.2 * *d + DVec3::splat(0.3)).collect();
-        let points = OrientedPoints::new(pos, dirs, None).unwrap();
+        let points = OrientedPoints::new(pos, dirs, None)?;
         let params = SpsrParams {
             depth: 7,
             box_scale: 3.0,
             ..SpsrParams::default()
         };
         let base = 3;
-        let frame = tree::Frame::around(&points, params.box_scale).unwrap();
+        let frame = tree::Frame::around(&points, params.box_scale)?;
         let mut samples = tree::merge(&points, &frame, params.depth);
         tree::estimate_density(&mut samples, &params, base);
         let levels = tree::build_levels(&samples, params.depth, base);
@@ -1023,5 +1023,6 @@ mod tests {
             assert!((f - sum).abs() < 1e-12, "at {u}: {f} against {sum}");
         }
         assert!(deep > 100, "too few points reach the finest depth: {deep}");
+        Ok(())
     }
 }
