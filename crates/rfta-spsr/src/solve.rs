@@ -433,22 +433,38 @@ where
 }
 
 /// Restriction `Σ_children w β_child` of a finer depth's right-hand side onto the coarser nodes
-/// (the transpose of [`prolong`], accumulated in node order).
-fn restrict(coarse: &Level, fine: &Level, fine_parents: &[u32], beta: &[f64]) -> Vec<f64> {
-    let mut out = vec![0.0; coarse.nodes.len()];
-    for (i, &b) in beta.iter().enumerate() {
-        if b == 0.0 {
-            continue;
-        }
-        let (ps, m) = prolongation_parents(fine.nodes[i]);
-        for &(slot, w) in &ps[..m] {
-            let j = fine_parents[i * 27 + slot];
-            if j != NONE {
-                out[j as usize] += w * b;
+/// (the transpose of [`prolong`]). Each coarse node gathers from the fine nodes at twice its
+/// coordinates plus -1, 0 or 1 per axis (weight 1/2 per odd axis), summed in fine node order:
+/// the same sum, bit for bit, as scattering the fine nodes in order.
+fn restrict(coarse: &Level, fine: &Level, beta: &[f64]) -> Vec<f64> {
+    coarse
+        .nodes
+        .par_iter()
+        .with_min_len(GRAIN)
+        .map(|&c| {
+            let ids = fine.node_index.block27([
+                2 * i64::from(c[0]),
+                2 * i64::from(c[1]),
+                2 * i64::from(c[2]),
+            ]);
+            let mut terms = [(0u32, 0.0f64); 27];
+            let mut m = 0;
+            for (o, &i) in ids.iter().enumerate() {
+                if i == NONE || beta[i as usize] == 0.0 {
+                    continue;
+                }
+                let odd = [o % 3 != 1, (o / 3) % 3 != 1, o / 9 != 1];
+                let w = odd
+                    .iter()
+                    .fold(1.0, |w, &odd| if odd { w * 0.5 } else { w });
+                terms[m] = (i, w * beta[i as usize]);
+                m += 1;
             }
-        }
-    }
-    out
+            let terms = &mut terms[..m];
+            terms.sort_unstable_by_key(|t| t.0);
+            terms.iter().fold(0.0, |acc, t| acc + t.1)
+        })
+        .collect()
 }
 
 /// Depths with at most this many nodes keep their index tables from the down pass of
@@ -774,15 +790,7 @@ pub(crate) fn down_pass(levels: &[Level], v: &[Vec<DVec3>]) -> DownPass {
             apply_g(&levels[d], &AxisTables::new(d as u32), &nbr, &v[d])
         });
         if d < depth {
-            let built;
-            let fine_parents = match &parents[d + 1] {
-                Some(p) => p,
-                None => {
-                    built = parent_table(&levels[d + 1], &levels[d]);
-                    &built
-                }
-            };
-            let r = restrict(&levels[d], &levels[d + 1], fine_parents, &beta[d + 1]);
+            let r = restrict(&levels[d], &levels[d + 1], &beta[d + 1]);
             b.iter_mut().zip(&r).for_each(|(b, r)| *b += r);
         }
         beta[d] = b;
@@ -845,9 +853,16 @@ pub(crate) fn solve(
                 vec![DVec3::ZERO; level.nodes.len()],
             )
         };
-        // Screening toward the target, minus what the coarser solution already gives.
-        for s in &sys.screen {
-            let fc = if d > 0 {
+        // Screening toward the target, minus what the coarser solution already gives (that
+        // value per screening cell in parallel, added to the right-hand side in order).
+        let coarse_values: Vec<f64> = sys
+            .screen
+            .par_iter()
+            .with_min_len(GRAIN)
+            .map(|s| {
+                if d == 0 {
+                    return 0.0;
+                }
                 let coarse = &levels[d - 1];
                 let cc = cell_of(s.pos, d as u32 - 1);
                 match coarse.cell(ic(cc)) {
@@ -858,9 +873,9 @@ pub(crate) fn solve(
                     }
                     None => 0.0,
                 }
-            } else {
-                0.0
-            };
+            })
+            .collect();
+        for (s, fc) in sys.screen.iter().zip(coarse_values) {
             let corners = &level.corners[s.cell as usize];
             for k in 0..8 {
                 rhs[corners[k] as usize] += s.weight * s.hats[k] * (s.target - fc);
@@ -944,11 +959,10 @@ mod tests {
     use super::*;
     use crate::{OrientedPoints, tree};
 
-    /// A thin octree (points on a small sphere off-centre, so most of the cube is coarse) and
-    /// arbitrary coefficients: `evaluate`, which stops at the first depth without a hat over the
-    /// point, equals the sum of every hat of every depth at the point.
-    #[test]
-    fn evaluate_is_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
+    /// A thin octree: 4,000 points on a small sphere off-centre, so most of the cube is coarse.
+    #[allow(clippy::type_complexity)]
+    fn thin_tree()
+    -> Result<(OrientedPoints, tree::Frame, Vec<Level>, u32), Box<dyn std::error::Error>> {
         let n = 4000;
         let dirs: Vec<DVec3> = (0..n)
             .map(|i| {
@@ -970,14 +984,65 @@ mod tests {
         let mut samples = tree::merge(&points, &frame, params.depth);
         tree::estimate_density(&mut samples, &params, base);
         let levels = tree::build_levels(&samples, params.depth, base);
-        // Pseudo-random coefficients (a fixed linear congruential sequence).
-        let mut state = 12345u64;
-        let mut next = || {
+        Ok((points, frame, levels, base))
+    }
+
+    /// A fixed pseudo-random sequence in [-1/2, 1/2).
+    fn sequence(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
             state = state
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        }
+    }
+
+    /// The parallel restriction (each coarse node gathering) equals, bit for bit, scattering the
+    /// fine nodes in order to their prolongation parents, at every depth.
+    #[test]
+    fn restriction_is_the_ordered_scatter() -> Result<(), Box<dyn std::error::Error>> {
+        let (_, _, levels, _) = thin_tree()?;
+        let mut next = sequence(7);
+        for d in 1..levels.len() {
+            let (coarse, fine) = (&levels[d - 1], &levels[d]);
+            // Some zeros, as a right-hand side has away from the samples.
+            let beta: Vec<f64> = fine
+                .nodes
+                .iter()
+                .map(|_| {
+                    let v = next();
+                    if v < -0.3 { 0.0 } else { v }
+                })
+                .collect();
+            let parents = parent_table(fine, coarse);
+            let mut want = vec![0.0; coarse.nodes.len()];
+            for (i, &b) in beta.iter().enumerate() {
+                let (ps, m) = prolongation_parents(fine.nodes[i]);
+                for &(slot, w) in &ps[..m] {
+                    let j = parents[i * 27 + slot];
+                    if j != NONE {
+                        want[j as usize] += w * b;
+                    }
+                }
+            }
+            let got = restrict(coarse, fine, &beta);
+            assert!(
+                got.iter()
+                    .zip(&want)
+                    .all(|(g, w)| g.to_bits() == w.to_bits()),
+                "depth {d}"
+            );
+        }
+        Ok(())
+    }
+
+    /// Arbitrary coefficients on a thin octree: `evaluate`, which stops at the first depth
+    /// without a hat over the point, equals the sum of every hat of every depth at the point.
+    #[test]
+    fn evaluate_is_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
+        let (points, frame, levels, base) = thin_tree()?;
+        let n = points.len();
+        let mut next = sequence(12345);
         let sol = Solution {
             x: levels
                 .iter()
