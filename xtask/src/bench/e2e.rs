@@ -10,8 +10,10 @@
 //! and on one shape's grids at the `--large` resolutions (sampled here with `rfta sample`'s code:
 //! the exact signed distance to `gt.obj` on `linspace(-1, 1, N + 1)^3`), it runs:
 //!
-//! - `rfta` (the default preset) on 2 threads, and on 1 thread at the first `--res`, for the
-//!   thread speed-up;
+//! - `rfta` (the default preset) on 2 threads, and at the first `--res` on 1 and 2 threads in
+//!   turn, 5 runs each, for the thread speed-up (this VM's speed drifts by a quarter over
+//!   seconds; the row is the run of median wall time, the speed-up line gives medians and
+//!   fastest runs, and every repeat must write the same mesh);
 //! - `rfta-fast` (`--preset fast`, gpytoolbox's 3 rounds) on 2 threads;
 //! - `mc`, marching cubes;
 //! - `gpytoolbox`, `reach_for_the_arcs` with its defaults, when a Python with gpytoolbox is found
@@ -24,6 +26,7 @@
 //! (`target/bench`), with the ratios of gpytoolbox's CPU time to ours and ours to marching cubes'.
 
 use std::fmt::Write as _;
+use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -49,6 +52,9 @@ struct Input {
     gt: PathBuf,
 }
 
+/// At the first resolution, runs of the default preset per thread count, alternating.
+const SCALING_REPEATS: usize = 5;
+
 /// One measured run.
 struct Run {
     wall: f64,
@@ -57,6 +63,10 @@ struct Run {
     chamfer: f64,
     faces: usize,
     watertight: bool,
+    /// Wall times of every repeat, fastest first (this run's among them).
+    walls: Vec<f64>,
+    /// Hash of the mesh file the run wrote.
+    hash: u64,
 }
 
 struct Args {
@@ -173,21 +183,30 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         None => println!("gpytoolbox: no Python with gpytoolbox found (--python PATH); skipped"),
     }
     let exe = std::env::current_exe()?;
-    let methods: [(&str, usize); 3] = [("rfta", 2), ("rfta-fast", 2), ("mc", 1)];
     let mut csv = String::from(
-        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status\n",
+        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status,walls_s\n",
     );
     let mut rows: Vec<(String, usize, String, usize, Result<Run>)> = Vec::new();
     for input in &inputs {
         let gt = rfta_io::read_mesh(&input.gt)?;
         let gt_index = MeshIndex::new(&gt)?;
-        let mut these = methods.to_vec();
-        if Some(&input.n) == a.res.first() {
-            these.push(("rfta", 1));
+        // At the first resolution the default preset runs on 1 and 2 threads in turn,
+        // `SCALING_REPEATS` times each: this VM's speed drifts by a quarter over seconds.
+        let scaling = Some(&input.n) == a.res.first();
+        let mut these: Vec<(&str, usize)> = Vec::new();
+        if scaling {
+            for _ in 0..SCALING_REPEATS {
+                these.extend([("rfta", 2), ("rfta", 1)]);
+            }
+        } else {
+            these.push(("rfta", 2));
         }
+        these.extend([("rfta-fast", 2), ("mc", 1)]);
         if python.is_some() && a.res.contains(&input.n) {
             these.push(("gpytoolbox", 1));
         }
+        // Per method and thread count, every run (the repeats in order).
+        let mut done: Vec<(&str, usize, Vec<Result<Run>>)> = Vec::new();
         for &(method, threads) in &these {
             let mesh_path = a.out.join(format!(
                 "{}_n{}_{method}_t{threads}.ply",
@@ -195,56 +214,95 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             ));
             let r = child(&exe, python.as_deref(), method, threads, input, &mesh_path).and_then(
                 |(wall, cpu, rss_mb)| {
-                    let mesh = rfta_io::read_mesh(&mesh_path)?;
-                    let index = MeshIndex::new(&mesh)?;
-                    let chamfer = rfta_metrics::chamfer_indexed(
-                        (&gt, &gt_index),
-                        (&mesh, &index),
-                        200_000,
-                        1,
-                    );
+                    let bytes = std::fs::read(&mesh_path)?;
+                    let hash = {
+                        let mut h = std::hash::DefaultHasher::new();
+                        bytes.hash(&mut h);
+                        h.finish()
+                    };
+                    // A repeat, or the other thread count, writes the same file: scored once.
+                    let same = done
+                        .iter()
+                        .filter(|(m, _, _)| *m == method)
+                        .flat_map(|(_, _, runs)| runs.iter().filter_map(|r| r.as_ref().ok()))
+                        .next();
+                    let (chamfer, faces, watertight) = match same {
+                        Some(prev) if prev.hash != hash => bail!(
+                            "{method} on {threads} thread(s) wrote another mesh than before: not deterministic"
+                        ),
+                        Some(prev) => (prev.chamfer, prev.faces, prev.watertight),
+                        None => {
+                            let mesh = rfta_io::read_mesh(&mesh_path)?;
+                            let index = MeshIndex::new(&mesh)?;
+                            let chamfer = rfta_metrics::chamfer_indexed(
+                                (&gt, &gt_index),
+                                (&mesh, &index),
+                                200_000,
+                                1,
+                            );
+                            let watertight = rfta_mesh::Topology::of(&mesh).is_watertight();
+                            (chamfer, mesh.n_faces(), watertight)
+                        }
+                    };
                     Ok(Run {
                         wall,
                         cpu,
                         rss_mb,
                         chamfer,
-                        faces: mesh.n_faces(),
-                        watertight: rfta_mesh::Topology::of(&mesh).is_watertight(),
+                        faces,
+                        watertight,
+                        walls: vec![wall],
+                        hash,
                     })
                 },
             );
             match &r {
-                Ok(r) => {
-                    println!(
-                        "{} n={} {method} t{threads}: {:.2} s wall, {:.2} CPU-s, {:.0} MB, Chamfer {:.5}",
-                        input.shape, input.n, r.wall, r.cpu, r.rss_mb, r.chamfer
-                    );
-                    writeln!(
-                        csv,
-                        "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok",
-                        input.shape,
-                        input.n,
-                        r.wall,
-                        r.cpu,
-                        r.rss_mb,
-                        r.chamfer,
-                        r.faces,
-                        r.watertight
-                    )?;
-                }
-                Err(e) => {
-                    println!(
-                        "{} n={} {method} t{threads}: failed: {e:#}",
-                        input.shape, input.n
-                    );
-                    writeln!(
-                        csv,
-                        "{},{},{method},{threads},,,,,,,{}",
-                        input.shape,
-                        input.n,
-                        format!("{e:#}").replace([',', '\n'], ";")
-                    )?;
-                }
+                Ok(r) => println!(
+                    "{} n={} {method} t{threads}: {:.2} s wall, {:.2} CPU-s, {:.0} MB, Chamfer {:.5}",
+                    input.shape, input.n, r.wall, r.cpu, r.rss_mb, r.chamfer
+                ),
+                Err(e) => println!(
+                    "{} n={} {method} t{threads}: failed: {e:#}",
+                    input.shape, input.n
+                ),
+            }
+            match done
+                .iter_mut()
+                .find(|(m, t, _)| *m == method && *t == threads)
+            {
+                Some((_, _, runs)) => runs.push(r),
+                None => done.push((method, threads, vec![r])),
+            }
+        }
+        let done = done
+            .into_iter()
+            .map(|(method, threads, runs)| (method, threads, median_run(runs)));
+        for (method, threads, r) in done {
+            match &r {
+                Ok(r) => writeln!(
+                    csv,
+                    "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok,{}",
+                    input.shape,
+                    input.n,
+                    r.wall,
+                    r.cpu,
+                    r.rss_mb,
+                    r.chamfer,
+                    r.faces,
+                    r.watertight,
+                    r.walls
+                        .iter()
+                        .map(|w| format!("{w:.6}"))
+                        .collect::<Vec<_>>()
+                        .join(";")
+                )?,
+                Err(e) => writeln!(
+                    csv,
+                    "{},{},{method},{threads},,,,,,,{}",
+                    input.shape,
+                    input.n,
+                    format!("{e:#}").replace([',', '\n'], ";")
+                )?,
             }
             rows.push((input.shape.clone(), input.n, method.to_string(), threads, r));
         }
@@ -255,6 +313,17 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     std::fs::write(a.out.join("e2e.md"), &report)?;
     println!("\n{report}\nwrote {}", a.out.join("e2e.md").display());
     Ok(())
+}
+
+/// One row from the runs of a method and thread count: the run of median wall time, with every
+/// run's wall time; the first failure if any failed.
+fn median_run(runs: Vec<Result<Run>>) -> Result<Run> {
+    let mut ok = runs.into_iter().collect::<Result<Vec<Run>>>()?;
+    ok.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+    let walls: Vec<f64> = ok.iter().map(|r| r.wall).collect();
+    let mut median = ok.swap_remove((ok.len() - 1) / 2);
+    median.walls = walls;
+    Ok(median)
 }
 
 /// The rows and inputs of an `e2e.csv` this command wrote.
@@ -286,6 +355,11 @@ fn read_csv(
                 chamfer: num(7),
                 faces: f[8].parse().unwrap_or(0),
                 watertight: f[9] == "true",
+                walls: f
+                    .get(11)
+                    .map(|w| w.split(';').filter_map(|v| v.parse().ok()).collect())
+                    .unwrap_or_else(|| vec![num(4)]),
+                hash: 0,
             })
         } else {
             Err(anyhow::anyhow!("{}", f[10]))
@@ -377,8 +451,48 @@ fn report(
     }
     writeln!(
         s,
-        "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (10 ms resolution: marching cubes shows 0).\n"
+        "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (10 ms resolution: marching cubes shows 0). With more than one run (the default preset on 1 and 2 threads, {SCALING_REPEATS} runs each, alternating), a row is the run of median wall time.\n"
     )?;
+    for &n in &ns {
+        let walls = |t: usize| -> Vec<(&str, &[f64])> {
+            rows.iter()
+                .filter(|(_, nn, m, tt, _)| *nn == n && m == "rfta" && *tt == t)
+                .filter_map(|(sh, _, _, _, r)| r.as_ref().ok().map(|r| (sh.as_str(), &r.walls[..])))
+                .collect()
+        };
+        let (one, two) = (walls(1), walls(2));
+        let pairs: Vec<(&[f64], &[f64])> = one
+            .iter()
+            .filter_map(|(sh, w1)| {
+                two.iter()
+                    .find(|(s2, _)| s2 == sh)
+                    .map(|(_, w2)| (*w1, *w2))
+            })
+            .collect();
+        if pairs.is_empty() {
+            continue;
+        }
+        let total = |pick: &dyn Fn(&[f64]) -> f64, side: usize| -> f64 {
+            pairs
+                .iter()
+                .map(|p| pick(if side == 1 { p.0 } else { p.1 }))
+                .sum()
+        };
+        let median = |w: &[f64]| w[(w.len() - 1) / 2];
+        let fastest = |w: &[f64]| w[0];
+        let runs = pairs[0].0.len();
+        writeln!(
+            s,
+            "From 1 to 2 threads at N = {n} ({} shapes, {runs} runs each per thread count): median wall time per shape {:.2} to {:.2} s, **{:.2}x**; fastest runs {:.2} to {:.2} s, {:.2}x.\n",
+            pairs.len(),
+            total(&median, 1) / pairs.len() as f64,
+            total(&median, 2) / pairs.len() as f64,
+            total(&median, 1) / total(&median, 2),
+            total(&fastest, 1) / pairs.len() as f64,
+            total(&fastest, 2) / pairs.len() as f64,
+            total(&fastest, 1) / total(&fastest, 2),
+        )?;
+    }
     writeln!(
         s,
         "| shape | N | method | threads | wall s | CPU s | peak MB | Chamfer | faces | watertight |"
