@@ -184,7 +184,9 @@ pub fn reconstruct_cancellable(
     params.validate()?;
     check_memory(samples.len(), params)?;
     match params.threads {
-        None => run(samples, params, progress, cancel),
+        // On a worker of the global pool (where the caller is not on one already): each
+        // parallel loop then forks from inside the pool instead of being injected into it.
+        None => rayon::scope(|_| run(samples, params, progress, cancel)),
         Some(t) => rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build()
