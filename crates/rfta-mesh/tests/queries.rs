@@ -322,3 +322,46 @@ fn segments_through_a_sphere_hit_it_and_segments_beside_or_inside_do_not() {
     assert!(!index.segment_hits(DVec3::new(1.5, 1.5, 0.0), DVec3::new(1.5, -1.5, 0.0)));
     assert!(!index.segment_hits(DVec3::new(2.0, 0.0, 0.0), DVec3::new(1.2, 0.0, 0.0)));
 }
+
+/// A mesh large enough to be indexed in parts built side by side (144,000 faces of a jittered
+/// torus and a sphere inside its hole): closest points, shells and the sign of the winding
+/// number against brute force, and the same tree whatever the thread count.
+#[test]
+fn an_index_built_in_parts_answers_as_brute_force() {
+    let mut mesh = shapes::torus(0.6, 0.25, 400, 180);
+    let mut rng = Rng::new(9);
+    for v in &mut mesh.vertices {
+        *v += DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 0.002;
+    }
+    mesh.append(&shapes::icosphere(0.2, 3));
+    assert!(mesh.n_faces() > 2 * 65_536);
+    let index = MeshIndex::new(&mesh).expect("valid mesh");
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool")
+        .install(|| MeshIndex::new(&mesh).expect("valid mesh"));
+    for p in random_points(200, 17, 1.0) {
+        let brute = brute_closest(&mesh, p);
+        let cp = index.closest_point(p);
+        assert!(
+            (cp.distance_squared - brute).abs() <= 1e-15 * brute.max(1e-300),
+            "{p}"
+        );
+        assert_eq!(one.closest_point(p), cp, "{p}");
+        let d = brute.sqrt();
+        assert_eq!(index.shell(p, d - 1e-3, d + 1e-3), Shell::Within, "{p}");
+        assert!(
+            matches!(index.shell(p, d + 1e-3, d + 2e-3), Shell::Closer(_)),
+            "{p}"
+        );
+        assert_eq!(index.shell(p, d - 2e-3, d - 1e-3), Shell::Beyond, "{p}");
+        if d > 1e-3 {
+            assert_eq!(
+                index.winding_number(p) > 0.5,
+                index.winding_number_exact(p) > 0.5,
+                "{p}"
+            );
+        }
+    }
+}
