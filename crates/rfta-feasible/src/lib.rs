@@ -32,6 +32,12 @@
 //! assert!((x - spheres[1].center).length() >= 1.0 - 1e-9);
 //! ```
 
+/// Most spheres a parallel task of the initial points or the fine-tuning takes: the owners' work
+/// varies a hundredfold (a sphere the surface cuts searches, one it touches does not), and
+/// rayon's default split leaves whole quarters of the range to one thread at the end of a
+/// round. Results are collected in sphere order, so this changes nothing but the balance.
+const SPHERES_PER_TASK: usize = 32;
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -365,6 +371,7 @@ pub fn initial_points_counted(
     };
     let per: Vec<Vec<(DVec3, DVec3)>> = set
         .par_iter()
+        .with_max_len(SPHERES_PER_TASK)
         .map(|&i| {
             let s = params.owner(spheres[i as usize]);
             let v = values[i as usize];
@@ -453,6 +460,7 @@ pub fn fine_tune_counted(
     }
     let per: Vec<Vec<(DVec3, DVec3)>> = (0..n as u32)
         .into_par_iter()
+        .with_max_len(SPHERES_PER_TASK)
         .map(|i| {
             let s = params.owner(spheres[i as usize]);
             let v = values[i as usize];

@@ -327,7 +327,11 @@ pub(crate) fn leaves_cube(levels: &[Level], values: &[Vec<f64>], iso: f64) -> bo
     })
 }
 
+/// Most cut leaves a parallel task of [`extract`] takes.
+const LEAVES_PER_TASK: usize = 64;
+
 /// Extract the iso-surface `χ = iso` (triangles oriented toward decreasing χ, i.e. outward).
+
 pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extracted {
     let depth = levels.len() as u32 - 1;
     let ctx = Ctx {
@@ -392,8 +396,11 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
     cand.par_sort_unstable();
     cand.dedup();
 
+    // Leaves vary in work (most hold one small loop, a few several): tasks of at most
+    // `LEAVES_PER_TASK` keep both threads busy to the end.
     let results: Vec<(LeafOut, Vec<[u64; 3]>, Vec<DVec3>)> = cand
         .par_iter()
+        .with_max_len(LEAVES_PER_TASK)
         .map(|&(d, ci)| {
             let level = &levels[d as usize];
             let c = crate::keys::demorton(level.cells[ci as usize]);

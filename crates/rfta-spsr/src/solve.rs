@@ -25,9 +25,9 @@ const CHUNK: usize = 2048;
 
 /// Smallest piece a parallel loop is split into. Loops that write each element on its own give
 /// the same bits however they are split, so this only trades scheduling against balance: one
-/// colour of a depth-8 Gauss-Seidel sweep holds a few thousand nodes, which a grain of
-/// [`CHUNK`] would leave on one thread.
-pub(crate) const GRAIN: usize = 256;
+/// colour of a depth-8 Gauss-Seidel sweep holds a few hundred to a few thousand nodes, which a
+/// grain of [`CHUNK`] (or of 256, as before) would leave on one thread.
+pub(crate) const GRAIN: usize = 64;
 
 /// Offset `o` (0..27) of a 3x3x3 stencil as `[-1, 0, 1]` per axis.
 #[inline]
