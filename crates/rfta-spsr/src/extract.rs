@@ -331,7 +331,6 @@ pub(crate) fn leaves_cube(levels: &[Level], values: &[Vec<f64>], iso: f64) -> bo
 const LEAVES_PER_TASK: usize = 64;
 
 /// Extract the iso-surface `χ = iso` (triangles oriented toward decreasing χ, i.e. outward).
-
 pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extracted {
     let depth = levels.len() as u32 - 1;
     let ctx = Ctx {
