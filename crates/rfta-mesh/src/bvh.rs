@@ -27,14 +27,44 @@ pub(crate) struct Node {
 /// that lies diagonally in its box, the box is as thick as the patch is wide; the slab is only as
 /// thick as the patch is curved, so a query from a point facing the patch (a closest point, the
 /// proof that a ball tangent to the surface holds none of it) prunes on the slab.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Slab {
     n: DVec3,
     lo: f64,
     hi: f64,
 }
 
+impl Slab {
+    /// No bound (every point's projection on the zero direction is 0, inside `[0, 0]`).
+    const NONE: Slab = Slab {
+        n: DVec3::ZERO,
+        lo: 0.0,
+        hi: 0.0,
+    };
+}
+
 impl Node {
+    /// A node whose contents are filled in once its children are built.
+    const PENDING: Node = Node {
+        bounds: Aabb::EMPTY,
+        a: 0,
+        b: 0,
+        leaf: false,
+        slab: Slab::NONE,
+    };
+
+    /// The inner node over `nodes[left]` and `nodes[right]` (its slab is filled later).
+    fn inner(nodes: &[Node], left: u32, right: u32) -> Node {
+        Node {
+            bounds: nodes[left as usize]
+                .bounds
+                .union(nodes[right as usize].bounds),
+            a: left,
+            b: right,
+            ..Node::PENDING
+        }
+    }
+
     /// A lower bound of the squared distance from `p` to the node's triangles: that of the box or
     /// of the slab, whichever is larger.
     #[inline]
@@ -143,13 +173,7 @@ impl Part {
     ) -> u32 {
         let node = &ob.nodes[ob_idx];
         let my = self.nodes.len() as u32;
-        self.nodes.push(Node {
-            bounds: Aabb::EMPTY,
-            a: 0,
-            b: 0,
-            leaf: false,
-            slab: Slab::default(),
-        });
+        self.nodes.push(Node::PENDING);
         if node.is_leaf() {
             let first = self.faces.len() as u32;
             let mut bounds = Aabb::EMPTY;
@@ -165,21 +189,12 @@ impl Part {
                 a: first,
                 b: prims.len() as u32,
                 leaf: true,
-                slab: Slab::default(),
+                slab: Slab::NONE,
             };
         } else {
             let left = self.flatten(ob, node.first_index as usize, corners, faces);
             let right = self.flatten(ob, node.first_index as usize + 1, corners, faces);
-            let bounds = self.nodes[left as usize]
-                .bounds
-                .union(self.nodes[right as usize].bounds);
-            self.nodes[my as usize] = Node {
-                bounds,
-                a: left,
-                b: right,
-                leaf: false,
-                slab: Slab::default(),
-            };
+            self.nodes[my as usize] = Node::inner(&self.nodes, left, right);
         }
         my
     }
@@ -290,7 +305,7 @@ impl MeshIndex {
             .map(|&(area, first, count)| {
                 let n = area.normalize_or_zero();
                 if n == DVec3::ZERO {
-                    return Slab::default();
+                    return Slab::NONE;
                 }
                 let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
                 for t in &tris[first as usize..(first + count) as usize] {
@@ -332,25 +347,11 @@ impl MeshIndex {
             }));
             return my;
         }
-        self.nodes.push(Node {
-            bounds: Aabb::EMPTY,
-            a: 0,
-            b: 0,
-            leaf: false,
-            slab: Slab::default(),
-        });
+        self.nodes.push(Node::PENDING);
         let mid = range.start + range.len() / 2;
         let left = self.join(parts, first_tri, range.start..mid);
         let right = self.join(parts, first_tri, mid..range.end);
-        self.nodes[my as usize] = Node {
-            bounds: self.nodes[left as usize]
-                .bounds
-                .union(self.nodes[right as usize].bounds),
-            a: left,
-            b: right,
-            leaf: false,
-            slab: Slab::default(),
-        };
+        self.nodes[my as usize] = Node::inner(&self.nodes, left, right);
         my
     }
 
