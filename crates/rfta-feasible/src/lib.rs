@@ -32,12 +32,6 @@
 //! assert!((x - spheres[1].center).length() >= 1.0 - 1e-9);
 //! ```
 
-/// Most spheres a parallel task of the initial points or the fine-tuning takes: the owners' work
-/// varies a hundredfold (a sphere the surface cuts searches, one it touches does not), and
-/// rayon's default split leaves whole quarters of the range to one thread at the end of a
-/// round. Results are collected in sphere order, so this changes nothing but the balance.
-const SPHERES_PER_TASK: usize = 32;
-
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -50,6 +44,12 @@ use rfta_geom::kernels::{
 use rfta_geom::{Sphere, TriMesh};
 use rfta_mesh::MeshIndex;
 use rfta_sphere_tree::SphereTree;
+
+/// Most spheres a parallel task of the initial points or the fine-tuning takes: the owners' work
+/// varies a hundredfold (a sphere the surface cuts searches, one it touches does not), and
+/// rayon's default split leaves whole quarters of the range to one thread at the end of a
+/// round. Results are collected in sphere order, so this changes nothing but the balance.
+const SPHERES_PER_TASK: usize = 32;
 
 /// Parameters, in normalized unit-box units. Defaults are the reference implementation's.
 #[derive(Debug, Clone, PartialEq)]

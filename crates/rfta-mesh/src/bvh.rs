@@ -279,31 +279,28 @@ impl MeshIndex {
         Ok(index)
     }
 
-    /// Every node's [`Slab`]: the direction from the summed area vectors (bottom-up), the extent
-    /// from the node's triangles (a contiguous range of `tris`, the tree being flattened depth
-    /// first), widened by a relative 1e-12 so that rounding never makes it too thin.
+    /// Every node's [`Slab`]: the direction of its area-weighted normal sum (from its winding
+    /// moments), the extent from its triangles (a contiguous range of `tris`, the tree being
+    /// flattened depth first), widened by a relative 1e-12 so that rounding never makes it too
+    /// thin.
     fn fill_slabs(&mut self) {
-        // (area vector, first triangle, triangle count) per node.
-        let mut span = vec![(DVec3::ZERO, 0u32, 0u32); self.nodes.len()];
+        // Each node's range of `tris`, bottom-up: children come after their parent.
+        let mut range = vec![(0u32, 0u32); self.nodes.len()];
         for i in (0..self.nodes.len()).rev() {
             let node = self.nodes[i];
-            span[i] = if node.leaf {
-                let area = self.tris[node.a as usize..(node.a + node.b) as usize]
-                    .iter()
-                    .map(|[a, b, c]| (*b - *a).cross(*c - *a))
-                    .fold(DVec3::ZERO, |s, v| s + v);
-                (area, node.a, node.b)
+            range[i] = if node.leaf {
+                (node.a, node.b)
             } else {
-                // Children come after their parent in depth-first order.
-                let (l, r) = (span[node.a as usize], span[node.b as usize]);
-                (l.0 + r.0, l.1.min(r.1), l.2 + r.2)
+                let (l, r) = (range[node.a as usize], range[node.b as usize]);
+                (l.0.min(r.0), l.1 + r.1)
             };
         }
         let tris = &self.tris;
-        let slabs: Vec<Slab> = span
+        let slabs: Vec<Slab> = range
             .par_iter()
-            .map(|&(area, first, count)| {
-                let n = area.normalize_or_zero();
+            .zip(&self.moments)
+            .map(|(&(first, count), m)| {
+                let n = m.normal.normalize_or_zero();
                 if n == DVec3::ZERO {
                     return Slab::NONE;
                 }

@@ -39,8 +39,9 @@ const REFINE_BAND: f64 = 0.1;
 pub(crate) struct Moments {
     /// Total area.
     area: f64,
-    /// Sum of area-weighted unit normals (`sum_t a_t n_t`).
-    normal: DVec3,
+    /// Sum of area-weighted unit normals (`sum_t a_t n_t`); also the direction of the node's
+    /// slab (`bvh::Slab`).
+    pub(crate) normal: DVec3,
     /// Expansion centre (area-weighted centroid).
     center: DVec3,
     /// `sum_t a_t n_t (c_t - center)^T`: column j holds `sum a_t n_t (c_t - center)_j`.

@@ -467,8 +467,8 @@ fn restrict(coarse: &Level, fine: &Level, beta: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Depths with at most this many nodes keep their index tables from the down pass of
-/// [`solve`] to the up pass instead of building them twice.
+/// Depths with at most this many nodes keep their index tables in the [`DownPass`], shared by
+/// every [`solve`] on the octree instead of built per solve.
 const KEEP_TABLES_BELOW: usize = 1 << 17;
 
 /// Below this many nodes a depth's conjugate-gradient loop runs on one thread: the coarse grids
@@ -752,9 +752,10 @@ pub(crate) struct DownPass {
 /// time in the chain of restrictions.
 pub(crate) fn down_pass(levels: &[Level], v: &[Vec<DVec3>]) -> DownPass {
     let depth = levels.len() - 1;
-    // Index tables of the down pass that the up pass needs again: kept for the depths small
-    // enough (at most `KEEP_TABLES_BELOW` nodes, 14 MB a table), rebuilt for the big ones so that
-    // the big tables exist one depth at a time.
+    // Index tables the up pass needs (the neighbour tables serve the down pass's own terms too):
+    // kept for the depths small enough (at most `KEEP_TABLES_BELOW` nodes, 14 MB a table), so
+    // that every solve on this octree shares them; the up pass builds the big ones one depth at a
+    // time.
     let small = |d: usize| levels[d].nodes.len() <= KEEP_TABLES_BELOW;
     let mut nbr: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
     let mut parents: Vec<Option<Vec<u32>>> = vec![None; depth + 1];
