@@ -39,6 +39,7 @@ mod error;
 pub mod feature_transform;
 pub mod kernels;
 mod mesh;
+pub mod plane;
 mod points;
 pub mod rng;
 mod sdf;

@@ -40,6 +40,7 @@ mod glb;
 mod npy;
 mod obj;
 mod off;
+mod plane;
 mod ply;
 mod sdf;
 mod stl;
@@ -47,6 +48,7 @@ mod text;
 
 pub use atomic::{temp_path, write_atomic};
 pub use error::{Error, Result};
+pub use plane::{Svg, is_sdf_2d, read_polylines, read_sdf_2d, write_polylines, write_svg};
 pub use npy::{NpyArray, parse_npy, write_npy_f64};
 pub use sdf::{
     GridBounds, RawSdf, SdfFormat, Sidecar, decode_oriented_points, decode_sdf, peek_sdf_len,

@@ -24,6 +24,8 @@
 //! # Ok::<(), rfta_mesh::Error>(())
 //! ```
 
+pub mod plane;
+
 use rayon::prelude::*;
 use rfta_geom::{TriMesh, glam::DVec3};
 use rfta_mesh::{MeshIndex, Result, Topology, sample_surface};

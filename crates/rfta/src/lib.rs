@@ -50,11 +50,13 @@ mod initial;
 mod memory;
 mod normalize;
 mod params;
+pub mod plane;
 mod report;
 mod rounds;
 
 pub use rfta_feasible as feasible;
 pub use rfta_geom as geom;
+pub use rfta_plane as plane_stages;
 pub use rfta_raster as raster;
 pub use rfta_sphere_tree as sphere_tree;
 pub use rfta_spsr as spsr;

@@ -22,6 +22,7 @@
 //! `linspace(-1, 1, N + 1)^3` with `rfta sample`'s code. Output: `target/eval/<run>/results.csv`,
 //! `report.md`, `chamfer.svg` and `contact_sheet.png`.
 
+mod plane;
 mod render;
 mod report;
 mod scenario;
@@ -87,6 +88,10 @@ struct Args {
     scenarios: Vec<scenario::Scenario>,
     /// `--levels L[,L]`: the scenarios' levels instead of each one's own.
     levels: Option<Vec<f64>>,
+    /// `--2d`: the 2D pipeline on 2D inputs ([`plane`]).
+    plane: bool,
+    /// `--res` was given.
+    res_given: bool,
 }
 
 const METHODS: [&str; 4] = ["mc", "rfta", "rfta-default", "rfta-paper"];
@@ -103,6 +108,8 @@ fn parse(args: &[String]) -> Result<Args> {
         out: None,
         scenarios: Vec::new(),
         levels: None,
+        plane: false,
+        res_given: false,
     };
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -110,7 +117,9 @@ fn parse(args: &[String]) -> Result<Args> {
         match flag.as_str() {
             "--inputs" => a.inputs = Some(PathBuf::from(value()?)),
             "--meshes" => a.meshes = Some(PathBuf::from(value()?)),
+            "--2d" => a.plane = true,
             "--res" => {
+                a.res_given = true;
                 a.res = value()?
                     .split(',')
                     .map(|t| t.trim().parse::<usize>())
@@ -188,14 +197,21 @@ fn parse(args: &[String]) -> Result<Args> {
 
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     let mut a = parse(args)?;
-    let data = root.join("../shared/data");
+    let data = std::env::var_os("RFTA_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or(root.join("../shared/data"));
+    if a.plane {
+        let inputs = a.inputs.clone().unwrap_or(data.join("inputs2d"));
+        let res = if a.res_given { a.res.clone() } else { vec![16, 32, 64] };
+        let out = a.out.clone().unwrap_or_else(|| {
+            root.join("target/eval")
+                .join(format!("2d-{}", std::process::id()))
+        });
+        std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+        return plane::run(&inputs, &res, &data.join("reference/gpytoolbox2d.csv"), &out);
+    }
     if a.inputs.is_none() && a.meshes.is_none() {
-        a.inputs = Some(
-            std::env::var_os("RFTA_DATA_DIR")
-                .map(PathBuf::from)
-                .unwrap_or(data.clone())
-                .join("inputs"),
-        );
+        a.inputs = Some(data.join("inputs"));
     }
     let (mut shapes, mut unreadable) = match (&a.inputs, &a.meshes) {
         (Some(dir), _) => load_inputs(dir)?,

@@ -1,0 +1,248 @@
+//! The 2D pipeline: closed polylines from 2D SDF samples (the paper's Figure 5), with the same
+//! [`Params`] and the same steps as the 3D one (normalize, rasterize, initial points, rounds,
+//! final solve), on `rfta-plane`'s stages.
+//!
+//! ```
+//! use rfta::{Params, plane};
+//! use rfta::geom::glam::DVec2;
+//! use rfta::geom::plane::{Grid2, Samples2};
+//!
+//! // A disc of radius 0.5 sampled on a 17 x 17 grid over [-1, 1]^2.
+//! let grid = Grid2::from_bounds([17, 17], DVec2::splat(-1.0), DVec2::splat(1.0)).unwrap();
+//! let values = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
+//! let samples = Samples2::grid(grid, values).unwrap();
+//! let out = plane::reconstruct(&samples, &Params::default()).unwrap();
+//! assert_eq!(out.curve.loops(), 1);
+//! assert!(out.curve.vertices.iter().all(|v| (v.length() - 0.5).abs() < 0.01));
+//! ```
+
+use std::time::Instant;
+
+use rfta_geom::glam::DVec2;
+use rfta_geom::plane::{PolylineIndex, Polylines, Samples2};
+use rfta_plane::arcs::{Circle, TuneParams};
+use rfta_plane::spsr::{self, Domain, SpsrParams};
+
+use crate::{CELLS_PER_SPACING, Error, Params, Result};
+
+/// The square of the 2D Poisson solves, in unit boxes around the samples' unit box.
+const PLANE_BOX: f64 = 1.5;
+
+/// Screening weight of the 2D solves, `alpha h` in `rfta-plane`'s units (chosen on the shared 2D
+/// inputs, docs/2d.md).
+pub const PLANE_SCREENING: f64 = 4.0;
+
+/// What a 2D reconstruction did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Report2 {
+    /// Samples given.
+    pub samples: usize,
+    /// Circles that own tangency points.
+    pub owners: usize,
+    /// Tangency points in the final solve.
+    pub points: usize,
+    /// Depth of the Poisson solves.
+    pub depth: u32,
+    /// Fine-tuning rounds run.
+    pub rounds: usize,
+    /// Loops in the output.
+    pub loops: usize,
+    /// Seconds, whole reconstruction.
+    pub seconds: f64,
+}
+
+/// A 2D reconstruction.
+#[derive(Debug, Clone)]
+pub struct Reconstruction2 {
+    /// Closed polylines, inside on the left, in the samples' coordinates.
+    pub curve: Polylines,
+    /// The tangency points and their outward normals, in the samples' coordinates.
+    pub points: Vec<(DVec2, DVec2)>,
+    /// What was done.
+    pub report: Report2,
+}
+
+/// Reconstruct closed polylines from 2D samples.
+///
+/// Uses [`Params::rounds`], [`Params::max_points_per_sphere`], [`Params::transport_step`],
+/// [`Params::tolerance`], [`Params::raster_resolution`], [`Params::clamp`], [`Params::spsr_depth`]
+/// (the quadtree's depth; default from the sample spacing), [`Params::owner_band`] and
+/// [`Params::threads`]; the 2D screening is [`PLANE_SCREENING`].
+///
+/// # Errors
+/// [`Error::InvalidParams`], [`Error::NoSurface`] when no circle has a free arc of the side a
+/// curve needs, [`Error::TooFewPoints`], [`Error::ThreadPool`].
+pub fn reconstruct(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
+    params.validate()?;
+    match params.threads {
+        None => rayon::scope(|_| run(samples, params)),
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| Error::ThreadPool {
+                threads: t,
+                reason: e.to_string(),
+            })?
+            .install(|| run(samples, params)),
+    }
+}
+
+fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
+    let start = Instant::now();
+    // Normalize as the reference does: the longer side of the samples' box becomes 1.
+    let (lo, hi) = samples.bounds();
+    let scale = (hi - lo).max_element().max(f64::MIN_POSITIVE);
+    let unit = |p: DVec2| (p - lo) / scale;
+    let values: Vec<f64> = samples.values().iter().map(|s| s / scale).collect();
+    let clamp = params.clamp.map(|c| c / scale);
+    let circles: Vec<Circle> = samples
+        .positions()
+        .iter()
+        .zip(&values)
+        .map(|(&p, &s)| Circle {
+            center: unit(p),
+            radius: clamp.map_or(s.abs(), |c| s.abs().min(c)),
+        })
+        .collect();
+    let spacing = match samples.as_grid() {
+        Some(g) => g.spacing().min_element() / scale,
+        None => mean_nearest(&circles),
+    };
+    let band = match (samples.as_grid(), params.owner_band) {
+        (Some(_), Some(b)) => b * spacing,
+        _ => f64::INFINITY,
+    };
+    let owners: Vec<usize> = (0..circles.len())
+        .filter(|&i| {
+            let r = circles[i].radius;
+            r > params.tolerance && r < band && clamp.is_none_or(|c| values[i].abs() < c)
+        })
+        .collect();
+    let n = samples.len() as f64;
+    let res = params
+        .raster_resolution
+        .unwrap_or(64 * (n.sqrt() / 16.0).ceil() as usize);
+    let extent = (hi - lo) / scale;
+    let mut cloud = rfta_plane::initial_points(
+        &circles,
+        &values,
+        &owners,
+        params.tolerance,
+        res,
+        DVec2::ZERO,
+        extent.max_element(),
+    );
+    if cloud.points() < 2 {
+        let sign = if values.iter().all(|&v| v >= 0.0) {
+            Some("positive (outside)")
+        } else if values.iter().all(|&v| v < 0.0) {
+            Some("negative (inside)")
+        } else {
+            None
+        };
+        return Err(match sign {
+            Some(sign) => Error::NoSurface {
+                samples: samples.len(),
+                sign,
+            },
+            None => Error::TooFewPoints {
+                feasible: cloud.points(),
+                spheres: samples.len(),
+            },
+        });
+    }
+    // The solves' square: the unit box's centre, PLANE_BOX unit boxes wide, grown to hold every
+    // owner's circle (so no point can leave it).
+    let centre = extent / 2.0;
+    let reach = cloud
+        .circle
+        .iter()
+        .map(|&i| ((circles[i].center - centre).abs() + DVec2::splat(circles[i].radius)).max_element())
+        .fold(PLANE_BOX / 2.0, f64::max);
+    let domain = Domain {
+        min: centre - DVec2::splat(reach * 1.02),
+        side: 2.04 * reach,
+    };
+    let depth = params.spsr_depth.unwrap_or_else(|| {
+        ((domain.side * CELLS_PER_SPACING / spacing).log2().ceil() as u32).clamp(4, 11)
+    });
+    let spsr_params = SpsrParams {
+        depth,
+        screening: PLANE_SCREENING,
+        ..SpsrParams::default()
+    };
+    let tune = TuneParams {
+        max_points: params.max_points_per_sphere,
+        step: params.transport_step,
+        tolerance: params.tolerance,
+        severe: 0.8,
+    };
+    let solve = |cloud: &rfta_plane::arcs::Owners| -> Result<spsr::Solution> {
+        let (points, normals) = cloud.oriented(&circles, &values);
+        spsr::solve(&points, &normals, domain, &spsr_params)
+            .map_err(|e| Error::InvalidParams(format!("2D screened Poisson: {e}")))
+    };
+    let mut rounds = 0;
+    for _ in 0..params.rounds {
+        if cloud.points() < 2 {
+            break;
+        }
+        let curve = solve(&cloud)?.curve();
+        if curve.is_empty() {
+            break;
+        }
+        cloud.fine_tune(&circles, &values, &PolylineIndex::new(&curve), &tune);
+        rounds += 1;
+    }
+    if cloud.points() < 2 {
+        return Err(Error::TooFewPoints {
+            feasible: cloud.points(),
+            spheres: samples.len(),
+        });
+    }
+    let mut curve = solve(&cloud)?.curve();
+    for v in &mut curve.vertices {
+        *v = *v * scale + lo;
+    }
+    let (points, normals) = cloud.oriented(&circles, &values);
+    let points = points
+        .into_iter()
+        .zip(normals)
+        .map(|(p, n)| (p * scale + lo, n))
+        .collect();
+    let report = Report2 {
+        samples: samples.len(),
+        owners: owners.len(),
+        points: cloud.points(),
+        depth,
+        rounds,
+        loops: curve.loops(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(Reconstruction2 {
+        curve,
+        points,
+        report,
+    })
+}
+
+/// Mean distance from each circle's centre to the nearest other centre (the spacing of scattered
+/// samples).
+fn mean_nearest(circles: &[Circle]) -> f64 {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    let coords: Vec<[f64; 2]> = circles.iter().map(|c| c.center.to_array()).collect();
+    let Ok(tree) = ImmutableKdTree::<f64, 2>::new_from_slice(&coords) else {
+        return 1.0 / (circles.len() as f64).sqrt();
+    };
+    let total: f64 = coords
+        .iter()
+        .map(|p| {
+            let near = tree
+                .query(p)
+                .nearest_n::<SquaredEuclidean<f64>>(std::num::NonZero::<usize>::MIN.saturating_add(1))
+                .execute();
+            near.get(1).map_or(0.0, |n| n.distance.sqrt())
+        })
+        .sum();
+    (total / circles.len() as f64).max(1e-9)
+}

@@ -1,0 +1,168 @@
+//! `cargo xtask eval --2d`: the 2D pipeline and marching squares on a folder of 2D inputs
+//! (`NAME/gt2d.obj`, `NAME/sdf2d_n{N}.npy` on `linspace(-1, 1, N + 1)^2`), scored as the shared
+//! reference `gpytoolbox2d.csv` is (Chamfer over 10^5 length-uniform samples each way, Hausdorff
+//! over vertices, loops), with the reference's means beside ours.
+//!
+//! ```text
+//! cargo xtask eval --2d [--inputs DIR] [--res 16,32,64] [--out DIR]
+//! ```
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use rfta_geom::glam::DVec2;
+use rfta_geom::plane::Polylines;
+use rfta_metrics::plane::{chamfer_2d, hausdorff_2d};
+
+/// Samples per polyline set for the Chamfer distance (the reference's).
+const SAMPLES: usize = 100_000;
+
+struct Row2 {
+    shape: String,
+    n: usize,
+    method: &'static str,
+    cpu_seconds: f64,
+    chamfer: f64,
+    hausdorff: f64,
+    loops: usize,
+    gt_loops: usize,
+    status: String,
+}
+
+pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) -> Result<()> {
+    let mut names: Vec<String> = std::fs::read_dir(inputs)
+        .with_context(|| format!("cannot read {}", inputs.display()))?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().join("gt2d.obj").exists())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    anyhow::ensure!(!names.is_empty(), "no NAME/gt2d.obj under {}", inputs.display());
+    let mut rows = Vec::new();
+    for name in &names {
+        let gt = rfta_io::read_polylines(&inputs.join(name).join("gt2d.obj"))?;
+        for &n in res {
+            let path = inputs.join(name).join(format!("sdf2d_n{n}.npy"));
+            let samples = rfta_io::read_sdf_2d(&path, Some((DVec2::splat(-1.0), DVec2::splat(1.0))))?;
+            let grid = *samples.as_grid().context("a 2D input is a grid")?;
+            let methods: [(&'static str, Box<dyn Fn() -> Result<Polylines>>); 2] = [
+                ("ms", Box::new(|| Ok(rfta_mc::marching_squares(&grid, samples.values(), 0.0)))),
+                (
+                    "rfta",
+                    Box::new(|| Ok(rfta::plane::reconstruct(&samples, &rfta::Params::default())?.curve)),
+                ),
+            ];
+            for (method, f) in methods {
+                let cpu = crate::bench::process_usage().0;
+                let t = Instant::now();
+                let result = f();
+                let cpu_seconds = (crate::bench::process_usage().0 - cpu).max(t.elapsed().as_secs_f64() * 0.0);
+                let row = match result {
+                    Ok(curve) => Row2 {
+                        shape: name.clone(),
+                        n,
+                        method,
+                        cpu_seconds,
+                        chamfer: chamfer_2d(&curve, &gt, SAMPLES),
+                        hausdorff: hausdorff_2d(&curve, &gt),
+                        loops: curve.loops(),
+                        gt_loops: gt.loops(),
+                        status: "ok".into(),
+                    },
+                    Err(e) => Row2 {
+                        shape: name.clone(),
+                        n,
+                        method,
+                        cpu_seconds,
+                        chamfer: f64::NAN,
+                        hausdorff: f64::NAN,
+                        loops: 0,
+                        gt_loops: gt.loops(),
+                        status: format!("error: {e}"),
+                    },
+                };
+                println!(
+                    "{:<12} n={:<3} {:<5} chamfer {:.5} loops {}/{} cpu {:.3}s {}",
+                    row.shape, row.n, row.method, row.chamfer, row.loops, row.gt_loops, row.cpu_seconds, row.status
+                );
+                rows.push(row);
+            }
+        }
+    }
+    let mut csv = String::from("mesh,n,method,cpu_seconds,chamfer,hausdorff,loops,gt_loops,status\n");
+    for r in &rows {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{:.4},{:.6},{:.6},{},{},{}",
+            r.shape, r.n, r.method, r.cpu_seconds, r.chamfer, r.hausdorff, r.loops, r.gt_loops, r.status.replace(',', ";")
+        );
+    }
+    std::fs::write(out.join("results.csv"), csv)?;
+    let report = report(&rows, &reference_rows(reference, &names));
+    std::fs::write(out.join("report.md"), &report)?;
+    println!("{report}\nwrote {}", out.display());
+    Ok(())
+}
+
+/// The reference's rows for the shapes evaluated: (method, n) -> (chamfer, cpu, loops right).
+fn reference_rows(path: &Path, names: &[String]) -> BTreeMap<(String, usize), Vec<(f64, f64, bool)>> {
+    let mut out: BTreeMap<(String, usize), Vec<(f64, f64, bool)>> = BTreeMap::new();
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return out;
+    };
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < 10 || !names.iter().any(|n| n == f[0]) {
+            continue;
+        }
+        let (Ok(n), Ok(cpu), Ok(ch)) = (f[1].parse(), f[4].parse(), f[5].parse()) else {
+            continue;
+        };
+        out.entry((f[2].to_string(), n)).or_default().push((ch, cpu, f[8] == f[9]));
+    }
+    out
+}
+
+fn report(rows: &[Row2], reference: &BTreeMap<(String, usize), Vec<(f64, f64, bool)>>) -> String {
+    let mut ns: Vec<usize> = rows.iter().map(|r| r.n).collect();
+    ns.sort_unstable();
+    ns.dedup();
+    let mut s = String::from(
+        "| samples | method | mean Chamfer | loops right | median CPU s | failed |\n|---|---|---|---|---|---|\n",
+    );
+    for &n in &ns {
+        for method in ["ms", "rfta"] {
+            let of: Vec<&Row2> = rows.iter().filter(|r| r.n == n && r.method == method).collect();
+            let ok: Vec<&&Row2> = of.iter().filter(|r| r.status == "ok").collect();
+            let mean = ok.iter().map(|r| r.chamfer).sum::<f64>() / ok.len().max(1) as f64;
+            let right = ok.iter().filter(|r| r.loops == r.gt_loops).count();
+            let mut cpu: Vec<f64> = of.iter().map(|r| r.cpu_seconds).collect();
+            cpu.sort_by(f64::total_cmp);
+            let median = cpu.get(cpu.len() / 2).copied().unwrap_or(f64::NAN);
+            let _ = writeln!(
+                s,
+                "| {}^2 | {method} (rfta) | {mean:.5} | {right}/{} | {median:.3} | {} |",
+                n + 1,
+                of.len(),
+                of.len() - ok.len()
+            );
+            if let Some(r) = reference.get(&(method.to_string(), n)) {
+                let mean = r.iter().map(|x| x.0).sum::<f64>() / r.len() as f64;
+                let right = r.iter().filter(|x| x.2).count();
+                let mut cpu: Vec<f64> = r.iter().map(|x| x.1).collect();
+                cpu.sort_by(f64::total_cmp);
+                let _ = writeln!(
+                    s,
+                    "| {}^2 | {method} (gpytoolbox) | {mean:.5} | {right}/{} | {:.3} | |",
+                    n + 1,
+                    r.len(),
+                    cpu[cpu.len() / 2]
+                );
+            }
+        }
+    }
+    s
+}
