@@ -29,6 +29,28 @@ def write(name, data):
         f.write(data)
 
 
+def png(width, height, values, bits=16):
+    """A grayscale PNG (no filtering), `values` row by row from the top."""
+    import zlib
+
+    def chunk(kind, data):
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    fmt = ">H" if bits == 16 else ">B"
+    rows = b"".join(
+        b"\0" + b"".join(struct.pack(fmt, values[r * width + c]) for c in range(width))
+        for r in range(height)
+    )
+    header = struct.pack(">IIBBBBB", width, height, bits, 0, 0, 0, 0)
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"IDAT", zlib.compress(rows))
+        + chunk(b"IEND", b"")
+    )
+
+
 def npy(shape, values, descr="<f4", fortran=False):
     """A version 1.0 .npy file; `values` in C order (transposed here for Fortran order)."""
     if fortran and len(shape) > 1:
@@ -99,6 +121,18 @@ def main():
     write("int32.npy", npy(dims, [int(v * 1000) for v in sph], descr="<i4"))
     write("shape_2d.npy", npy((13, 169), sph))
     write("shape_4d.npy", npy((13, 13, 13, 1), sph))
+
+    # 2D: a disc's SDF with a NaN, a 1-pixel image, an 8-bit image, an image without its value
+    # range, a CSV whose rows change width.
+    disc = [math.hypot(-1 + i / 4, -1 + j / 4) - 0.5 for i in range(9) for j in range(9)]
+    disc[10] = float("nan")
+    write("nan_2d.npy", npy((9, 9), disc, descr="<f8"))
+    write("pixel_1.png", png(1, 1, [30000]))
+    write("pixel_1.json", json.dumps({"values": [-1, 1]}))
+    write("gray_8bit.png", png(4, 4, list(range(16)), bits=8))
+    write("gray_8bit.json", json.dumps({"values": [-1, 1]}))
+    write("no_range.png", png(4, 4, [1000 * k for k in range(16)]))
+    write("ragged_2d.csv", "x,y,s\n0,0,-0.5\n1,0,0.5\n0,1,0.5,7\n")
     write("sphere.npy", npy(dims, sph, descr="<f8"))
     write("sphere_fortran.npy", npy(dims, sph, descr="<f8", fortran=True))
     write("sphere_bigendian.npy", npy(dims, sph, descr=">f8"))

@@ -9,6 +9,7 @@
 
 mod batch;
 mod info;
+mod plane;
 mod psr;
 mod reconstruct;
 mod sample;
@@ -40,9 +41,10 @@ struct Cli {
 enum Command {
     /// Sample the exact signed distance of a mesh (negative inside) on a regular grid.
     Sample(sample::Args),
-    /// Marching cubes: the iso-surface of an SDF grid (the baseline rfta is compared against).
+    /// Marching cubes: the iso-surface of an SDF grid (the baseline rfta is compared against);
+    /// marching squares on a 2D grid (polylines out: .obj .svg .csv).
     Mc {
-        /// The SDF grid (.npy or .exr).
+        /// The SDF grid (.npy or .exr; 2D: .npy of shape (nx, ny), .png).
         input: PathBuf,
         /// Output mesh (.obj .ply .stl .glb).
         #[arg(short, long)]
@@ -56,7 +58,8 @@ enum Command {
     },
     /// Reach for the Arcs: a mesh from signed distance samples.
     Reconstruct(reconstruct::Args),
-    /// Reconstruct a built-in genus-2 shape from a 21^3 grid and compare with marching cubes.
+    /// Reconstruct a built-in genus-2 shape from a 21^3 grid and compare with marching cubes
+    /// (`--2d`: a 2D shape with a hole against marching squares, drawn as SVG).
     Demo(reconstruct::DemoArgs),
     /// Screened Poisson surface reconstruction of oriented points (PoissonRecon's algorithm).
     Psr(psr::Args),
@@ -137,6 +140,10 @@ fn mc(
     iso: f64,
     ui: &ui::Ui,
 ) -> anyhow::Result<()> {
+    if rfta_io::is_sdf_2d(input)? {
+        ui::check_output_2d(output)?;
+        return plane::marching_squares(input, output, bounds, iso, ui);
+    }
     ui::check_output(output)?;
     let samples = rfta_io::read_sdf(input, bounds)?.validate(input)?;
     let Some(grid) = samples.as_grid() else {

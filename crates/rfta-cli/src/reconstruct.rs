@@ -34,8 +34,9 @@ pub(crate) enum Gpu {
 #[derive(Debug, clap::Args)]
 pub(crate) struct Args {
     /// SDF samples: a grid (.npy, .exr) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
+    /// 2D samples are detected: .npy of shape (nx, ny) or (n, 3), .csv rows x y s, 16-bit .png.
     input: PathBuf,
-    /// Output mesh (.obj .ply .stl .glb).
+    /// Output mesh (.obj .ply .stl .glb); for 2D input, polylines (.obj .svg .csv).
     #[arg(short, long)]
     output: PathBuf,
     /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
@@ -295,6 +296,12 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
 }
 
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
+    if rfta_io::is_sdf_2d(&args.input)? {
+        crate::ui::check_output_2d(&args.output)?;
+        let mut params = args.tuning.params();
+        params.clamp = args.checks.clamp;
+        return crate::plane::reconstruct(&args.input, &args.output, args.bounds, &params, ui);
+    }
     crate::ui::check_output(&args.output)?;
     if let Some(p) = &args.points {
         crate::ui::check_output(p)?;
@@ -418,26 +425,42 @@ pub(crate) struct DemoArgs {
     /// Output mesh.
     #[arg(short, long, default_value = "demo.obj")]
     output: PathBuf,
-    /// Grid cells per axis over [-1, 1]^3.
-    #[arg(long, default_value_t = 20)]
-    res: usize,
+    /// Grid cells per axis over [-1, 1]^3 (2D: default 32).
+    #[arg(long)]
+    res: Option<usize>,
+    /// The 2D demo: a shape with a hole against marching squares, one SVG (default demo2d.svg).
+    #[arg(long = "2d")]
+    two_d: bool,
     #[command(flatten)]
     tuning: Tuning,
 }
 
 pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
-    crate::ui::check_output(&args.output)?;
-    if args.res < 2 {
+    let output = if args.two_d && args.output == Path::new("demo.obj") {
+        PathBuf::from("demo2d.svg")
+    } else {
+        args.output.clone()
+    };
+    if args.two_d {
+        crate::ui::check_output_2d(&output)?;
+    } else {
+        crate::ui::check_output(&output)?;
+    }
+    let res = args.res.unwrap_or(if args.two_d { 32 } else { 20 });
+    if res < 2 {
         bail!("--res must be at least 2");
     }
-    let grid = Grid::cube(args.res, -1.0, 1.0)?;
+    if args.two_d {
+        return crate::plane::demo(&output, res, &args.tuning.params(), ui);
+    }
+    let grid = Grid::cube(res, -1.0, 1.0)?;
     let values: Vec<f64> = (0..grid.len())
         .map(|i| two_tori(grid.position(i)))
         .collect();
     let samples = SdfSamples::grid(grid, values.clone())?;
     ui.say(format!(
         "demo: two overlapping tori (genus 2) sampled on a {0}^3 grid ({1} samples)",
-        args.res + 1,
+        res + 1,
         grid.len()
     ));
     let params = args.tuning.params();
@@ -457,7 +480,7 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
     let genus = rfta_mesh::Topology::of(&out.mesh).genus();
     ui.say(format!(
         "distance of vertices to the true surface, mean / max: rfta {rm:.4} / {rx:.4}, marching cubes {mm:.4} / {mx:.4} (grid spacing {:.4}); genus {}",
-        2.0 / args.res as f64,
+        2.0 / res as f64,
         genus.map_or("n/a (several components)".into(), |g| g.to_string())
     ));
     write(&args.output, &out.mesh, ui)

@@ -205,6 +205,24 @@ pub(crate) fn check_output(path: &std::path::Path) -> anyhow::Result<()> {
             path.display()
         );
     }
+    check_dir(path)
+}
+
+/// As [`check_output`], for polylines (.obj, .svg, .csv).
+pub(crate) fn check_output_2d(path: &std::path::Path) -> anyhow::Result<()> {
+    if !matches!(
+        rfta_io::extension_of(path).as_deref(),
+        Some("obj" | "svg" | "csv")
+    ) {
+        anyhow::bail!(
+            "{}: 2D input gives polylines; write .obj, .svg or .csv",
+            path.display()
+        );
+    }
+    check_dir(path)
+}
+
+fn check_dir(path: &std::path::Path) -> anyhow::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => std::path::Path::new("."),

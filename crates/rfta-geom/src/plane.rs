@@ -11,7 +11,7 @@
 //! use rfta_geom::glam::DVec2;
 //!
 //! // The unit circle's SDF on a 33 x 33 grid over [-2, 2]^2, contoured at 0.
-//! let grid = Grid2::from_bounds([33, 33], DVec2::splat(-2.0), DVec2::splat(2.0)).unwrap();
+//! let grid = Grid2::from_bounds([33, 33], DVec2::splat(-2.0), DVec2::splat(2.0)).expect("valid test input");
 //! let values: Vec<f64> = (0..grid.len()).map(|i| grid.position(i).length() - 1.0).collect();
 //! let curve = contour(&grid, &values, 0.0);
 //! assert_eq!(curve.loops(), 1);
@@ -72,9 +72,7 @@ impl Grid2 {
     /// As [`Grid2::new`], and if `max` is not above `min`.
     pub fn from_bounds(dims: [usize; 2], min: DVec2, max: DVec2) -> Result<Self> {
         if !(max.cmpgt(min).all()) {
-            return Err(Error::InvalidGrid(format!(
-                "bounds {min}..{max} are empty"
-            )));
+            return Err(Error::InvalidGrid(format!("bounds {min}..{max} are empty")));
         }
         let cells = DVec2::new(
             dims[0].saturating_sub(1).max(1) as f64,
@@ -510,7 +508,10 @@ impl<'a> PolylineIndex<'a> {
         ];
         let bucket = |p: DVec2| -> (usize, usize) {
             let q = ((p - min) / cell).max(DVec2::ZERO);
-            ((q.x as usize).min(dims[0] - 1), (q.y as usize).min(dims[1] - 1))
+            (
+                (q.x as usize).min(dims[0] - 1),
+                (q.y as usize).min(dims[1] - 1),
+            )
         };
         let mut counts = vec![0u32; dims[0] * dims[1] + 1];
         let mut row_counts = vec![0u32; dims[1] + 1];
@@ -659,7 +660,8 @@ mod tests {
     use super::*;
 
     fn circle_grid(n: usize, r: f64) -> (Grid2, Vec<f64>) {
-        let grid = Grid2::from_bounds([n, n], DVec2::splat(-1.0), DVec2::splat(1.0)).unwrap();
+        let grid = Grid2::from_bounds([n, n], DVec2::splat(-1.0), DVec2::splat(1.0))
+            .expect("valid test input");
         let values = (0..grid.len())
             .map(|i| grid.position(i).length() - r)
             .collect();
@@ -692,7 +694,8 @@ mod tests {
 
     #[test]
     fn an_annulus_gives_two_loops_with_the_hole_clockwise() {
-        let grid = Grid2::from_bounds([61, 61], DVec2::splat(-1.0), DVec2::splat(1.0)).unwrap();
+        let grid = Grid2::from_bounds([61, 61], DVec2::splat(-1.0), DVec2::splat(1.0))
+            .expect("valid test input");
         let values: Vec<f64> = (0..grid.len())
             .map(|i| {
                 let r = grid.position(i).length();
@@ -711,7 +714,7 @@ mod tests {
     #[test]
     fn the_saddle_follows_the_bilinear_interpolant() {
         // Corners (0,0) and (1,1) inside; the interpolant's saddle value decides.
-        let grid = Grid2::from_bounds([2, 2], DVec2::ZERO, DVec2::ONE).unwrap();
+        let grid = Grid2::from_bounds([2, 2], DVec2::ZERO, DVec2::ONE).expect("valid test input");
         // values [S00, S01, S10, S11]: y fastest.
         let joined = contour(&grid, &[-1.0, 1.0, 1.0, -2.0], 0.0); // saddle (2-1)/(-5) < 0
         let split = contour(&grid, &[-1.0, 2.0, 2.0, -1.0], 0.0); // saddle (1-4)/(-6) > 0
@@ -752,7 +755,7 @@ mod tests {
     fn bad_grids_and_samples_are_errors() {
         assert!(Grid2::new([1, 5], DVec2::ZERO, DVec2::ONE).is_err());
         assert!(Grid2::new([5, 5], DVec2::ZERO, DVec2::new(0.0, 1.0)).is_err());
-        let grid = Grid2::new([2, 2], DVec2::ZERO, DVec2::ONE).unwrap();
+        let grid = Grid2::new([2, 2], DVec2::ZERO, DVec2::ONE).expect("valid test input");
         assert!(Samples2::grid(grid, vec![0.0; 4]).is_err());
         assert!(Samples2::grid(grid, vec![1.0, f64::NAN, 1.0, -1.0]).is_err());
         assert!(Samples2::grid(grid, vec![1.0; 3]).is_err());

@@ -48,8 +48,8 @@ mod text;
 
 pub use atomic::{temp_path, write_atomic};
 pub use error::{Error, Result};
-pub use plane::{Svg, is_sdf_2d, read_polylines, read_sdf_2d, write_polylines, write_svg};
 pub use npy::{NpyArray, parse_npy, write_npy_f64};
+pub use plane::{Svg, is_sdf_2d, read_polylines, read_sdf_2d, write_polylines, write_svg};
 pub use sdf::{
     GridBounds, RawSdf, SdfFormat, Sidecar, decode_oriented_points, decode_sdf, peek_sdf_len,
     read_oriented_points, read_sdf, sidecar_path, write_oriented_points_ply, write_sdf_grid,
@@ -158,6 +158,10 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
 }
 
 /// The file's extension in lower case, if it has one.
+pub fn extension_of(path: &Path) -> Option<String> {
+    extension(path)
+}
+
 pub(crate) fn extension(path: &Path) -> Option<String> {
     path.extension()
         .and_then(|e| e.to_str())

@@ -54,7 +54,11 @@ pub fn is_sdf_2d(path: &Path) -> Result<bool> {
             Ok(text
                 .lines()
                 .map(str::trim)
-                .find(|l| !l.is_empty() && !l.starts_with('#') && l.split([',', ' ', '\t']).any(|t| t.parse::<f64>().is_ok()))
+                .find(|l| {
+                    !l.is_empty()
+                        && !l.starts_with('#')
+                        && l.split([',', ' ', '\t']).any(|t| t.parse::<f64>().is_ok())
+                })
                 .is_some_and(|l| l.split([',', ' ', '\t']).filter(|t| !t.is_empty()).count() == 3))
         }
         _ => Ok(false),
@@ -107,7 +111,12 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
             match arr.shape.as_slice() {
                 &[n, 3] => {
                     let (p, v) = (0..n)
-                        .map(|r| (DVec2::new(arr.data[3 * r], arr.data[3 * r + 1]), arr.data[3 * r + 2]))
+                        .map(|r| {
+                            (
+                                DVec2::new(arr.data[3 * r], arr.data[3 * r + 1]),
+                                arr.data[3 * r + 2],
+                            )
+                        })
                         .unzip();
                     Samples2::scattered(p, v)
                 }
@@ -134,7 +143,13 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
                 ))
                 .at(path)
             })?;
-            Samples2::grid(g, pixels.iter().map(|&u| lo + (hi - lo) * f64::from(u) / 65535.0).collect())
+            Samples2::grid(
+                g,
+                pixels
+                    .iter()
+                    .map(|&u| lo + (hi - lo) * f64::from(u) / 65535.0)
+                    .collect(),
+            )
         }
         _ => {
             return Err(Error::UnknownFormat {
@@ -154,12 +169,18 @@ fn parse_rows(bytes: &[u8]) -> ParseResult<(Vec<DVec2>, Vec<f64>)> {
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let toks: Vec<&str> = line.split([',', ' ', '\t']).filter(|t| !t.is_empty()).collect();
+        let toks: Vec<&str> = line
+            .split([',', ' ', '\t'])
+            .filter(|t| !t.is_empty())
+            .collect();
         if toks.iter().all(|t| t.parse::<f64>().is_err()) && p.is_empty() {
             continue; // a header
         }
         if toks.len() != 3 {
-            return Err(ParseError::at_line(k + 1, format!("expected 3 numbers (x y s), found {}", toks.len())));
+            return Err(ParseError::at_line(
+                k + 1,
+                format!("expected 3 numbers (x y s), found {}", toks.len()),
+            ));
         }
         let x = parse_f64(toks[0], k + 1, "x")?;
         let y = parse_f64(toks[1], k + 1, "y")?;
@@ -190,7 +211,9 @@ fn decode_png(bytes: &[u8]) -> ParseResult<([usize; 2], Vec<u16>)> {
     if buf.len() < w * h * 2 {
         return Err(ParseError::new("PNG data shorter than its size"));
     }
-    let px = |row: usize, col: usize| u16::from_be_bytes([buf[2 * (row * w + col)], buf[2 * (row * w + col) + 1]]);
+    let px = |row: usize, col: usize| {
+        u16::from_be_bytes([buf[2 * (row * w + col)], buf[2 * (row * w + col) + 1]])
+    };
     let mut values = Vec::with_capacity(w * h);
     for col in 0..w {
         for j in 0..h {
@@ -209,7 +232,10 @@ fn decode_png(bytes: &[u8]) -> ParseResult<([usize; 2], Vec<u16>)> {
 pub fn write_polylines(path: &Path, lines: &Polylines) -> Result<()> {
     match extension(path).as_deref() {
         Some("obj") => write_atomic(path, |w| {
-            writeln!(w, "# rfta: closed polylines, inside on the left of each edge")?;
+            writeln!(
+                w,
+                "# rfta: closed polylines, inside on the left of each edge"
+            )?;
             for v in &lines.vertices {
                 writeln!(w, "v {} {} 0", v.x, v.y)?;
             }
@@ -227,7 +253,9 @@ pub fn write_polylines(path: &Path, lines: &Polylines) -> Result<()> {
             Ok(())
         }),
         Some("svg") => {
-            let svg = Svg::around(&[lines], &[]).curve(lines, "#c0392b", "").finish();
+            let svg = Svg::around(&[lines], &[])
+                .curve(lines, "#c0392b", "")
+                .finish();
             write_atomic(path, |w| w.write_all(svg.as_bytes()))
         }
         _ => Err(Error::UnknownFormat {
@@ -257,11 +285,14 @@ pub fn read_polylines(path: &Path) -> Result<Polylines> {
                 let idx: Vec<u32> = toks
                     .map(|t| {
                         let i: i64 = t.split('/').next().unwrap_or("").parse().map_err(|_| {
-                            ParseError::at_line(k + 1, format!("'{t}' is not a vertex index")).at(path)
+                            ParseError::at_line(k + 1, format!("'{t}' is not a vertex index"))
+                                .at(path)
                         })?;
                         let n = vertices.len() as i64;
                         let i = if i < 0 { n + i } else { i - 1 };
-                        u32::try_from(i).map_err(|_| ParseError::at_line(k + 1, "vertex index out of range").at(path))
+                        u32::try_from(i).map_err(|_| {
+                            ParseError::at_line(k + 1, "vertex index out of range").at(path)
+                        })
                     })
                     .collect::<Result<_>>()?;
                 edges.extend(idx.windows(2).map(|w| [w[0], w[1]]));
@@ -316,7 +347,10 @@ impl Svg {
         for (p, v) in positions.iter().zip(values) {
             let (x, y) = self.map(*p);
             let fill = if *v < 0.0 { "#2e86c1" } else { "#aab7b8" };
-            let _ = writeln!(self.body, r#"<circle cx="{x:.2}" cy="{y:.2}" r="2" fill="{fill}"/>"#);
+            let _ = writeln!(
+                self.body,
+                r#"<circle cx="{x:.2}" cy="{y:.2}" r="2" fill="{fill}"/>"#
+            );
         }
         self
     }
@@ -329,7 +363,11 @@ impl Svg {
             let (a, b) = (self.map(s.a), self.map(s.b));
             let _ = write!(d, "M{:.2} {:.2}L{:.2} {:.2}", a.0, a.1, b.0, b.1);
         }
-        let dash = if dash.is_empty() { String::new() } else { format!(r#" stroke-dasharray="{dash}""#) };
+        let dash = if dash.is_empty() {
+            String::new()
+        } else {
+            format!(r#" stroke-dasharray="{dash}""#)
+        };
         let _ = writeln!(
             self.body,
             r#"<path d="{d}" fill="none" stroke="{colour}" stroke-width="1.5"{dash}/>"#

@@ -119,7 +119,7 @@ fn edge_vertex(grid: &Grid, values: &[f64], iso: f64, edge: u64) -> DVec3 {
 /// use rfta_geom::glam::DVec2;
 /// use rfta_geom::plane::Grid2;
 ///
-/// let grid = Grid2::from_bounds([21, 21], DVec2::splat(-1.0), DVec2::splat(1.0)).unwrap();
+/// let grid = Grid2::from_bounds([21, 21], DVec2::splat(-1.0), DVec2::splat(1.0)).expect("valid test input");
 /// let values: Vec<f64> = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
 /// let curve = rfta_mc::marching_squares(&grid, &values, 0.0);
 /// assert_eq!(curve.loops(), 1);

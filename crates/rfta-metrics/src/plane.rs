@@ -77,7 +77,7 @@ mod tests {
         let v = [(-h, -h), (h, -h), (h, h), (-h, h)]
             .map(|(x, y)| DVec2::new(x, y) + offset)
             .to_vec();
-        Polylines::new(v, vec![[0, 1], [1, 2], [2, 3], [3, 0]]).unwrap()
+        Polylines::new(v, vec![[0, 1], [1, 2], [2, 3], [3, 0]]).expect("valid test input")
     }
 
     #[test]

@@ -223,7 +223,14 @@ impl Owners {
             .with_min_len(32)
             .map(|k| {
                 let i = self.circle[k];
-                tune_one(circles[i], values[i], &self.free[k], &self.angles[k], curve, params)
+                tune_one(
+                    circles[i],
+                    values[i],
+                    &self.free[k],
+                    &self.angles[k],
+                    curve,
+                    params,
+                )
             })
             .collect();
         self.angles = new;
@@ -326,8 +333,8 @@ mod tests {
             let outside = (circles[0].point(t) - circles[1].center).length() >= 1.0 - 1e-12;
             assert_eq!(free.holding(t).is_some(), outside, "at {t}");
         }
-        assert!((free.nearest(0.1).unwrap() - PI / 3.0).abs() < 1e-12);
-        assert!((free.nearest(-0.1).unwrap() - 5.0 * PI / 3.0).abs() < 1e-12);
+        assert!((free.nearest(0.1).expect("free") - PI / 3.0).abs() < 1e-12);
+        assert!((free.nearest(-0.1).expect("free") - 5.0 * PI / 3.0).abs() < 1e-12);
         // Transport stops at the arc's end.
         assert!((free.transport(PI / 2.0, 0.0, 1.0) - PI / 3.0).abs() < 1e-12);
         assert!((free.transport(PI / 2.0, 0.0, 0.1) - (PI / 2.0 - 0.1)).abs() < 1e-12);

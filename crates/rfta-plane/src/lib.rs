@@ -29,7 +29,7 @@
 //! let cloud = initial_points(&circles, &values, &owners, 1e-4, 128, DVec2::ZERO, 1.0);
 //! let (points, normals) = cloud.oriented(&circles, &values);
 //! let domain = spsr::Domain { min: DVec2::splat(-0.25), side: 1.5 };
-//! let curve = spsr::solve(&points, &normals, domain, &spsr::SpsrParams::default()).unwrap().curve();
+//! let curve = spsr::solve(&points, &normals, domain, &spsr::SpsrParams::default()).expect("solves").curve();
 //! assert_eq!(curve.loops(), 1);
 //! for v in &curve.vertices {
 //!     assert!(((*v - DVec2::splat(0.5)).length() - 0.3).abs() < 0.01);

@@ -36,7 +36,9 @@ pub fn empty_space(circles: &[Circle], res: usize, min: DVec2, side: f64) -> Vec
             }
             let w = w2.sqrt();
             let x0 = ((c.center.x - w - min.x) / h - 0.5).ceil().max(0.0);
-            let x1 = ((c.center.x + w - min.x) / h - 0.5).floor().min((res - 1) as f64);
+            let x1 = ((c.center.x + w - min.x) / h - 0.5)
+                .floor()
+                .min((res - 1) as f64);
             if x1 < x0 {
                 continue;
             }

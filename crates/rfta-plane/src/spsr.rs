@@ -193,11 +193,19 @@ impl Line {
     }
 }
 
-/// The system at one depth: the Laplacian's integrals and the screening's 3x3 stencil per node.
+/// The system at one depth: the Laplacian's integrals and the screening's 3x3 stencils, kept
+/// only for the nodes near a point (`slot[k]` indexes `screening`, `NONE` elsewhere).
 struct Level {
     line: Line,
+    slot: Vec<u32>,
     screening: Vec<[f64; 9]>,
 }
+
+/// No screening at a node.
+const NONE: u32 = u32::MAX;
+
+/// The stencil of a node without screening.
+const ZERO: [f64; 9] = [0.0; 9];
 
 impl Level {
     fn nodes(&self) -> usize {
@@ -210,14 +218,38 @@ impl Level {
         let n = self.line.n;
         let m = n + 1;
         let k = i * m + j;
-        let s = &self.screening[k];
+        let s = match self.slot[k] {
+            NONE => &ZERO,
+            at => &self.screening[at as usize],
+        };
         if i > 0 && i < n && j > 0 && j < n {
+            if self.slot[k] == NONE {
+                let sum = x[k - m - 1]
+                    + x[k - m]
+                    + x[k - m + 1]
+                    + x[k - 1]
+                    + x[k + 1]
+                    + x[k + m - 1]
+                    + x[k + m]
+                    + x[k + m + 1];
+                return (-sum / 3.0, 8.0 / 3.0);
+            }
             // Away from the border the Laplacian's stencil is the same everywhere (in 2D it does
             // not even depend on h): 8/3 at the node, -1/3 at its eight neighbours.
             let mut off = 0.0;
-            for (t, &kk) in [k - m - 1, k - m, k - m + 1, k - 1, k, k + 1, k + m - 1, k + m, k + m + 1]
-                .iter()
-                .enumerate()
+            for (t, &kk) in [
+                k - m - 1,
+                k - m,
+                k - m + 1,
+                k - 1,
+                k,
+                k + 1,
+                k + m - 1,
+                k + m,
+                k + m + 1,
+            ]
+            .iter()
+            .enumerate()
             {
                 if t != 4 {
                     off += (s[t] - 1.0 / 3.0) * x[kk];
@@ -285,60 +317,75 @@ impl Level {
     }
 }
 
-/// Bilinear prolongation of node values from `n` cells to `2n` cells per side.
+/// Bilinear prolongation of node values from `n` cells to `2n` cells per side (separable: along
+/// y, then along x).
 fn prolong(coarse: &[f64], n: usize) -> Vec<f64> {
     let (mc, mf) = (n + 1, 2 * n + 1);
-    (0..mf * mf)
-        .into_par_iter()
-        .with_min_len(1024)
-        .map(|k| {
-            let (i, j) = (k / mf, k % mf);
-            let pick = |a: usize| -> [(usize, f64); 2] {
-                if a % 2 == 0 {
-                    [(a / 2, 1.0), (a / 2, 0.0)]
-                } else {
-                    [(a / 2, 0.5), (a / 2 + 1, 0.5)]
-                }
+    let mut half = vec![0.0; mc * mf];
+    for i in 0..mc {
+        let (src, dst) = (
+            &coarse[i * mc..(i + 1) * mc],
+            &mut half[i * mf..(i + 1) * mf],
+        );
+        for (jj, d) in dst.iter_mut().enumerate() {
+            *d = if jj % 2 == 0 {
+                src[jj / 2]
+            } else {
+                0.5 * (src[jj / 2] + src[jj / 2 + 1])
             };
-            let mut v = 0.0;
-            for (ci, wi) in pick(i) {
-                for (cj, wj) in pick(j) {
-                    if wi * wj != 0.0 {
-                        v += wi * wj * coarse[ci * mc + cj];
-                    }
-                }
+        }
+    }
+    let mut fine = vec![0.0; mf * mf];
+    for (ii, row) in fine.chunks_exact_mut(mf).enumerate() {
+        let a = &half[(ii / 2) * mf..(ii / 2 + 1) * mf];
+        if ii % 2 == 0 {
+            row.copy_from_slice(a);
+        } else {
+            let b = &half[(ii / 2 + 1) * mf..(ii / 2 + 2) * mf];
+            for ((r, x), y) in row.iter_mut().zip(a).zip(b) {
+                *r = 0.5 * (x + y);
             }
-            v
-        })
-        .collect()
+        }
+    }
+    fine
 }
 
-/// The transpose of [`prolong`]: fine node values summed into the coarse nodes.
+/// The transpose of [`prolong`]: fine node values summed into the coarse nodes with weights 1
+/// and 1/2 per axis.
 fn restrict(fine: &[f64], n: usize) -> Vec<f64> {
     let (mc, mf) = (n + 1, 2 * n + 1);
-    (0..mc * mc)
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|k| {
-            let (ci, cj) = (k / mc, k % mc);
-            let mut v = 0.0;
-            for di in -1..=1isize {
-                let i = 2 * ci as isize + di;
-                if i < 0 || i >= mf as isize {
-                    continue;
-                }
-                for dj in -1..=1isize {
-                    let j = 2 * cj as isize + dj;
-                    if j < 0 || j >= mf as isize {
-                        continue;
-                    }
-                    let w = if di == 0 { 1.0 } else { 0.5 } * if dj == 0 { 1.0 } else { 0.5 };
-                    v += w * fine[i as usize * mf + j as usize];
-                }
+    // Along x first: fine rows into coarse rows.
+    let mut half = vec![0.0; mc * mf];
+    for ii in 0..mf {
+        let w = if ii % 2 == 0 { 1.0 } else { 0.5 };
+        let row = &fine[ii * mf..(ii + 1) * mf];
+        let targets = if ii % 2 == 0 {
+            ii / 2..ii / 2 + 1
+        } else {
+            ii / 2..ii / 2 + 2
+        };
+        for target in targets {
+            for (d, x) in half[target * mf..(target + 1) * mf].iter_mut().zip(row) {
+                *d += w * x;
             }
-            v
-        })
-        .collect()
+        }
+    }
+    let mut coarse = vec![0.0; mc * mc];
+    for i in 0..mc {
+        let (src, dst) = (
+            &half[i * mf..(i + 1) * mf],
+            &mut coarse[i * mc..(i + 1) * mc],
+        );
+        for (jj, x) in src.iter().enumerate() {
+            if jj % 2 == 0 {
+                dst[jj / 2] += x;
+            } else {
+                dst[jj / 2] += 0.5 * x;
+                dst[jj / 2 + 1] += 0.5 * x;
+            }
+        }
+    }
+    coarse
 }
 
 /// Coarsest depth of the multigrid hierarchy, solved by many sweeps.
@@ -364,10 +411,13 @@ pub fn solve(
     if points.len() < 2 {
         return Err(SpsrError::TooFewPoints(points.len()));
     }
-    if !(1..=12).contains(&params.depth)
-        || !(params.screening >= 0.0 && params.screening.is_finite())
-        || !(domain.side > 0.0 && domain.side.is_finite() && domain.min.is_finite())
-    {
+    let valid = (1..=12).contains(&params.depth)
+        && params.screening >= 0.0
+        && params.screening.is_finite()
+        && domain.side > 0.0
+        && domain.side.is_finite()
+        && domain.min.is_finite();
+    if !valid {
         return Err(SpsrError::InvalidParams(format!(
             "depth {} (1 to 12), screening {}, domain side {}",
             params.depth, params.screening, domain.side
@@ -405,7 +455,9 @@ pub fn solve(
         .iter()
         .map(|hat| {
             let c: f64 = (0..4)
-                .map(|k| hat.weights[k] * counts[(hat.cell.0 + k / 2) * (nd + 1) + hat.cell.1 + k % 2])
+                .map(|k| {
+                    hat.weights[k] * counts[(hat.cell.0 + k / 2) * (nd + 1) + hat.cell.1 + k % 2]
+                })
                 .sum();
             hd / c.max(1e-12)
         })
@@ -417,7 +469,8 @@ pub fn solve(
         .map(|d| vec![DVec2::ZERO; (cells(d) + 1) * (cells(d) + 1)])
         .collect();
     for ((&p, &n), &l) in points.iter().zip(normals).zip(&lengths) {
-        let d = ((domain.side / l).log2().floor() as i64).clamp(coarsest as i64, depth as i64) as u32;
+        let d =
+            ((domain.side / l).log2().floor() as i64).clamp(coarsest as i64, depth as i64) as u32;
         let hat = Hat::at(p, domain.min, h(d), cells(d));
         let m = cells(d) + 1;
         let scale = l / (h(d) * h(d));
@@ -438,23 +491,40 @@ pub fn solve(
     let alpha = params.screening / h(depth);
     let levels: Vec<Level> = (0..=depth)
         .map(|d| {
-            let line = Line { n: cells(d), h: h(d) };
+            let line = Line {
+                n: cells(d),
+                h: h(d),
+            };
             let m = line.n + 1;
-            let mut screening = vec![[0.0; 9]; if d >= coarsest { m * m } else { 0 }];
+            let mut slot = vec![NONE; if d >= coarsest { m * m } else { 0 }];
+            let mut screening: Vec<[f64; 9]> = Vec::new();
             if d >= coarsest {
                 for (&p, &l) in points.iter().zip(&lengths) {
                     let hat = Hat::at(p, domain.min, h(d), line.n);
                     for a in 0..4 {
+                        let (ai, aj) = (hat.cell.0 + a / 2, hat.cell.1 + a % 2);
+                        let k = ai * m + aj;
+                        if slot[k] == NONE {
+                            slot[k] = screening.len() as u32;
+                            screening.push([0.0; 9]);
+                        }
+                        let stencil = &mut screening[slot[k] as usize];
                         for b in 0..4 {
-                            let (ai, aj) = (hat.cell.0 + a / 2, hat.cell.1 + a % 2);
-                            let (di, dj) = ((b / 2) as isize - (a / 2) as isize, (b % 2) as isize - (a % 2) as isize);
-                            screening[ai * m + aj][((di + 1) * 3 + dj + 1) as usize] +=
+                            let (di, dj) = (
+                                (b / 2) as isize - (a / 2) as isize,
+                                (b % 2) as isize - (a % 2) as isize,
+                            );
+                            stencil[((di + 1) * 3 + dj + 1) as usize] +=
                                 alpha * l * hat.weights[a] * hat.weights[b];
                         }
                     }
                 }
             }
-            Level { line, screening }
+            Level {
+                line,
+                slot,
+                screening,
+            }
         })
         .collect();
 
@@ -469,6 +539,16 @@ pub fn solve(
         .map(|k| {
             let (i, j) = (k / m, k % m);
             let mut b = 0.0;
+            if i > 0 && i < line.n && j > 0 && j < line.n {
+                // Away from the border: mixed integrals (1/2, 0, -1/2), masses (h/6, 2h/3, h/6).
+                let (hm, hc) = (line.h / 6.0, 2.0 * line.h / 3.0);
+                let up = |kk: usize| v[kk];
+                let (r0, r2) = (k - m, k + m);
+                // d/dx: rows i-1 (+1/2) and i+1 (-1/2), masses along j.
+                let mx = |r: usize| up(r - 1).x * hm + up(r).x * hc + up(r + 1).x * hm;
+                let my = |c: usize| up(c - m).y * hm + up(c).y * hc + up(c + m).y * hm;
+                return 0.5 * (mx(r0) - mx(r2)) + 0.5 * (my(k - 1) - my(k + 1));
+            }
             for di in -1..=1isize {
                 if !line.exists(i, di) {
                     continue;
@@ -497,18 +577,28 @@ pub fn solve(
     levels[coarsest as usize].smooth(&mut x, &rhs_at[coarsest as usize], COARSE_SWEEPS);
     for d in coarsest + 1..=depth {
         x = prolong(&x, cells(d - 1));
-        v_cycle(&levels, d, coarsest, &mut x, &rhs_at[d as usize], params.sweeps);
+        v_cycle(
+            &levels,
+            d,
+            coarsest,
+            &mut x,
+            &rhs_at[d as usize],
+            params.sweeps,
+        );
     }
     for _ in 0..params.cycles {
-        v_cycle(&levels, depth, coarsest, &mut x, &rhs_at[depth as usize], params.sweeps);
+        v_cycle(
+            &levels,
+            depth,
+            coarsest,
+            &mut x,
+            &rhs_at[depth as usize],
+            params.sweeps,
+        );
     }
 
-    let grid = Grid2::new(
-        [m, m],
-        domain.min,
-        DVec2::splat(h(depth)),
-    )
-    .map_err(|e| SpsrError::InvalidParams(e.to_string()))?;
+    let grid = Grid2::new([m, m], domain.min, DVec2::splat(h(depth)))
+        .map_err(|e| SpsrError::InvalidParams(e.to_string()))?;
     let mut solution = Solution {
         grid,
         values: x,
@@ -566,7 +656,7 @@ mod tests {
             depth: 8,
             ..SpsrParams::default()
         };
-        let s = solve(&p, &n, Domain::around(&p, 1.5), &params).unwrap();
+        let s = solve(&p, &n, Domain::around(&p, 1.5), &params).expect("valid test input");
         let c = s.curve();
         assert_eq!(c.loops(), 1);
         assert!(c.is_closed());
@@ -590,7 +680,10 @@ mod tests {
             cycles: 30,
             ..few.clone()
         };
-        let (a, b) = (solve(&p, &n, domain, &few).unwrap(), solve(&p, &n, domain, &many).unwrap());
+        let (a, b) = (
+            solve(&p, &n, domain, &few).expect("solves"),
+            solve(&p, &n, domain, &many).expect("solves"),
+        );
         // One full-multigrid pass is within a small fraction of the converged solution.
         let scale = b.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let err = a

@@ -202,13 +202,23 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         .unwrap_or(root.join("../shared/data"));
     if a.plane {
         let inputs = a.inputs.clone().unwrap_or(data.join("inputs2d"));
-        let res = if a.res_given { a.res.clone() } else { vec![16, 32, 64] };
+        let res = if a.res_given {
+            a.res.clone()
+        } else {
+            vec![16, 32, 64]
+        };
         let out = a.out.clone().unwrap_or_else(|| {
             root.join("target/eval")
                 .join(format!("2d-{}", std::process::id()))
         });
-        std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
-        return plane::run(&inputs, &res, &data.join("reference/gpytoolbox2d.csv"), &out);
+        std::fs::create_dir_all(&out)
+            .with_context(|| format!("cannot create {}", out.display()))?;
+        return plane::run(
+            &inputs,
+            &res,
+            &data.join("reference/gpytoolbox2d.csv"),
+            &out,
+        );
     }
     if a.inputs.is_none() && a.meshes.is_none() {
         a.inputs = Some(data.join("inputs"));

@@ -10,7 +10,6 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 use anyhow::{Context, Result};
 use rfta_geom::glam::DVec2;
@@ -19,6 +18,27 @@ use rfta_metrics::plane::{chamfer_2d, hausdorff_2d};
 
 /// Samples per polyline set for the Chamfer distance (the reference's).
 const SAMPLES: usize = 100_000;
+
+/// The reference's rows: (method, n) -> (Chamfer, CPU seconds, loop count right) per shape.
+type Reference = BTreeMap<(String, usize), Vec<(f64, f64, bool)>>;
+
+/// The methods compared.
+#[derive(Clone, Copy)]
+enum Method {
+    /// Marching squares.
+    Ms,
+    /// Reach for the Arcs, default parameters.
+    Rfta,
+}
+
+impl Method {
+    fn name(self) -> &'static str {
+        match self {
+            Method::Ms => "ms",
+            Method::Rfta => "rfta",
+        }
+    }
+}
 
 struct Row2 {
     shape: String,
@@ -40,26 +60,29 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    anyhow::ensure!(!names.is_empty(), "no NAME/gt2d.obj under {}", inputs.display());
+    anyhow::ensure!(
+        !names.is_empty(),
+        "no NAME/gt2d.obj under {}",
+        inputs.display()
+    );
     let mut rows = Vec::new();
     for name in &names {
         let gt = rfta_io::read_polylines(&inputs.join(name).join("gt2d.obj"))?;
         for &n in res {
             let path = inputs.join(name).join(format!("sdf2d_n{n}.npy"));
-            let samples = rfta_io::read_sdf_2d(&path, Some((DVec2::splat(-1.0), DVec2::splat(1.0))))?;
+            let samples =
+                rfta_io::read_sdf_2d(&path, Some((DVec2::splat(-1.0), DVec2::splat(1.0))))?;
             let grid = *samples.as_grid().context("a 2D input is a grid")?;
-            let methods: [(&'static str, Box<dyn Fn() -> Result<Polylines>>); 2] = [
-                ("ms", Box::new(|| Ok(rfta_mc::marching_squares(&grid, samples.values(), 0.0)))),
-                (
-                    "rfta",
-                    Box::new(|| Ok(rfta::plane::reconstruct(&samples, &rfta::Params::default())?.curve)),
-                ),
-            ];
-            for (method, f) in methods {
+            for m in [Method::Ms, Method::Rfta] {
+                let method = m.name();
                 let cpu = crate::bench::process_usage().0;
-                let t = Instant::now();
-                let result = f();
-                let cpu_seconds = (crate::bench::process_usage().0 - cpu).max(t.elapsed().as_secs_f64() * 0.0);
+                let result: Result<Polylines> = match m {
+                    Method::Ms => Ok(rfta_mc::marching_squares(&grid, samples.values(), 0.0)),
+                    Method::Rfta => rfta::plane::reconstruct(&samples, &rfta::Params::default())
+                        .map(|r| r.curve)
+                        .map_err(Into::into),
+                };
+                let cpu_seconds = crate::bench::process_usage().0 - cpu;
                 let row = match result {
                     Ok(curve) => Row2 {
                         shape: name.clone(),
@@ -86,18 +109,34 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
                 };
                 println!(
                     "{:<12} n={:<3} {:<5} chamfer {:.5} loops {}/{} cpu {:.3}s {}",
-                    row.shape, row.n, row.method, row.chamfer, row.loops, row.gt_loops, row.cpu_seconds, row.status
+                    row.shape,
+                    row.n,
+                    row.method,
+                    row.chamfer,
+                    row.loops,
+                    row.gt_loops,
+                    row.cpu_seconds,
+                    row.status
                 );
                 rows.push(row);
             }
         }
     }
-    let mut csv = String::from("mesh,n,method,cpu_seconds,chamfer,hausdorff,loops,gt_loops,status\n");
+    let mut csv =
+        String::from("mesh,n,method,cpu_seconds,chamfer,hausdorff,loops,gt_loops,status\n");
     for r in &rows {
         let _ = writeln!(
             csv,
             "{},{},{},{:.4},{:.6},{:.6},{},{},{}",
-            r.shape, r.n, r.method, r.cpu_seconds, r.chamfer, r.hausdorff, r.loops, r.gt_loops, r.status.replace(',', ";")
+            r.shape,
+            r.n,
+            r.method,
+            r.cpu_seconds,
+            r.chamfer,
+            r.hausdorff,
+            r.loops,
+            r.gt_loops,
+            r.status.replace(',', ";")
         );
     }
     std::fs::write(out.join("results.csv"), csv)?;
@@ -108,8 +147,8 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
 }
 
 /// The reference's rows for the shapes evaluated: (method, n) -> (chamfer, cpu, loops right).
-fn reference_rows(path: &Path, names: &[String]) -> BTreeMap<(String, usize), Vec<(f64, f64, bool)>> {
-    let mut out: BTreeMap<(String, usize), Vec<(f64, f64, bool)>> = BTreeMap::new();
+fn reference_rows(path: &Path, names: &[String]) -> Reference {
+    let mut out = Reference::new();
     let Ok(text) = std::fs::read_to_string(path) else {
         return out;
     };
@@ -121,12 +160,14 @@ fn reference_rows(path: &Path, names: &[String]) -> BTreeMap<(String, usize), Ve
         let (Ok(n), Ok(cpu), Ok(ch)) = (f[1].parse(), f[4].parse(), f[5].parse()) else {
             continue;
         };
-        out.entry((f[2].to_string(), n)).or_default().push((ch, cpu, f[8] == f[9]));
+        out.entry((f[2].to_string(), n))
+            .or_default()
+            .push((ch, cpu, f[8] == f[9]));
     }
     out
 }
 
-fn report(rows: &[Row2], reference: &BTreeMap<(String, usize), Vec<(f64, f64, bool)>>) -> String {
+fn report(rows: &[Row2], reference: &Reference) -> String {
     let mut ns: Vec<usize> = rows.iter().map(|r| r.n).collect();
     ns.sort_unstable();
     ns.dedup();
@@ -135,7 +176,10 @@ fn report(rows: &[Row2], reference: &BTreeMap<(String, usize), Vec<(f64, f64, bo
     );
     for &n in &ns {
         for method in ["ms", "rfta"] {
-            let of: Vec<&Row2> = rows.iter().filter(|r| r.n == n && r.method == method).collect();
+            let of: Vec<&Row2> = rows
+                .iter()
+                .filter(|r| r.n == n && r.method == method)
+                .collect();
             let ok: Vec<&&Row2> = of.iter().filter(|r| r.status == "ok").collect();
             let mean = ok.iter().map(|r| r.chamfer).sum::<f64>() / ok.len().max(1) as f64;
             let right = ok.iter().filter(|r| r.loops == r.gt_loops).count();
