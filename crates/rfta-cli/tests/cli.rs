@@ -293,3 +293,54 @@ fn demo_reconstructs_the_genus_two_shape_better_than_marching_cubes() {
     assert!(mesh.signed_volume() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// 2D input is detected from the file: `reconstruct` and `mc` write polylines (`v x y 0`,
+/// `l a b`), SVG and CSV; `demo --2d` writes one SVG with both curves.
+#[test]
+fn two_dimensional_input_gives_polylines() {
+    let dir = temp("plane");
+    let input = dir.join("disc.npy");
+    // A disc of radius 0.5 on a 21 x 21 grid over [-1, 1]^2, S[i, j] at (x_i, y_j).
+    let n = 21;
+    let values: Vec<f64> = (0..n * n)
+        .map(|k| {
+            let (x, y) = (-1.0 + 0.1 * (k / n) as f64, -1.0 + 0.1 * (k % n) as f64);
+            (x * x + y * y).sqrt() - 0.5
+        })
+        .collect();
+    rfta_io::write_atomic(&input, |w| rfta_io::write_npy_f64(w, &[n, n], &values))
+        .expect("write npy");
+    for (cmd, out) in [("reconstruct", "curve.obj"), ("mc", "ms.obj")] {
+        let out = dir.join(out);
+        let o = rfta(&[cmd, s(&input), "-o", s(&out)]);
+        assert!(o.status.success(), "{cmd}: {}", stderr(&o));
+        let text = std::fs::read_to_string(&out).expect("written");
+        let curve = rfta_io::read_polylines(&out).expect("polylines");
+        assert_eq!(curve.loops(), 1, "{cmd}");
+        assert!(curve.is_closed(), "{cmd}");
+        assert!(text.lines().any(|l| l.starts_with("l ")));
+        for v in text.lines().filter(|l| l.starts_with("v ")) {
+            let f: Vec<f64> = v[2..].split(' ').map(|t| t.parse().expect("number")).collect();
+            assert_eq!(f.len(), 3);
+            assert_eq!(f[2], 0.0);
+            assert!(((f[0] * f[0] + f[1] * f[1]).sqrt() - 0.5).abs() < 0.01, "{cmd}: {v}");
+        }
+    }
+    for ext in ["svg", "csv"] {
+        let out = dir.join(format!("curve.{ext}"));
+        let o = rfta(&["reconstruct", s(&input), "-o", s(&out)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = std::fs::read_to_string(&out).expect("written");
+        assert!(text.starts_with(if ext == "svg" { "<svg" } else { "x0,y0,x1,y1" }));
+    }
+    // A mesh extension is refused for 2D input, before any work.
+    let o = rfta(&["reconstruct", s(&input), "-o", s(&dir.join("x.ply"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("write .obj, .svg or .csv"), "{}", stderr(&o));
+    let demo = dir.join("demo.svg");
+    let o = rfta(&["demo", "--2d", "-o", s(&demo)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(&demo).expect("svg");
+    assert_eq!(svg.matches("<path").count(), 2, "both curves drawn");
+    assert!(stderr(&o).contains("marching squares"));
+}

@@ -1,0 +1,134 @@
+//! The 2D pipeline on analytic shapes with known answers.
+
+use rfta::geom::glam::DVec2;
+use rfta::geom::plane::{Grid2, PolylineIndex, Polylines, Samples2};
+use rfta::{Params, plane};
+
+fn grid_samples(n: usize, sdf: impl Fn(DVec2) -> f64) -> Samples2 {
+    let grid =
+        Grid2::from_bounds([n + 1, n + 1], DVec2::splat(-1.0), DVec2::splat(1.0)).expect("grid");
+    let values = (0..grid.len()).map(|i| sdf(grid.position(i))).collect();
+    Samples2::grid(grid, values).expect("samples")
+}
+
+/// Mean and largest |sdf| over the curve's vertices (the vertices' distance to the true curve for
+/// an exact SDF).
+fn vertex_error(curve: &Polylines, sdf: impl Fn(DVec2) -> f64) -> (f64, f64) {
+    let d: Vec<f64> = curve.vertices.iter().map(|&v| sdf(v).abs()).collect();
+    (
+        d.iter().sum::<f64>() / d.len() as f64,
+        d.iter().copied().fold(0.0, f64::max),
+    )
+}
+
+fn circle(p: DVec2) -> f64 {
+    (p - DVec2::new(0.1, -0.05)).length() - 0.55
+}
+
+/// A square of side 1.2 with a round hole of radius 0.25 well inside it: the SDF is exact (inside
+/// the material the nearer of the two boundaries, in the hole the hole's, outside the square's).
+fn square_with_hole(p: DVec2) -> f64 {
+    let q = p.abs() - DVec2::splat(0.6);
+    let square = q.max(DVec2::ZERO).length() + q.x.max(q.y).min(0.0);
+    let hole = (p - DVec2::new(0.15, 0.1)).length() - 0.25;
+    square.max(-hole)
+}
+
+#[test]
+fn a_circle_comes_back_as_one_loop_on_it() {
+    // 33 x 33 samples, spacing 0.0625: the vertices within a tenth of a spacing of the circle,
+    // a two-hundredth on average.
+    let out = plane::reconstruct(&grid_samples(32, circle), &Params::default()).expect("curve");
+    assert_eq!(out.curve.loops(), 1);
+    assert!(out.curve.is_closed());
+    let (mean, max) = vertex_error(&out.curve, circle);
+    assert!(mean < 0.0625 / 200.0 && max < 0.0625 / 10.0, "{mean} {max}");
+    // Counter-clockwise around the inside.
+    let index = PolylineIndex::new(&out.curve);
+    assert_eq!(index.winding(DVec2::new(0.1, -0.05)), 1);
+    assert_eq!(index.winding(DVec2::new(0.9, 0.9)), 0);
+    // The tangency points: each sample circle touches the true curve at one point, which the
+    // fine-tuning moves its points toward (a small circle's free arc can hold a point a little
+    // off it, its normal turned by up to the arc); their normals point out.
+    let far = out.points.iter().map(|(p, _)| circle(*p).abs()).fold(0.0, f64::max);
+    assert!(far < 0.1 * 0.0625, "{far}");
+    let mut alignment = 0.0;
+    for (p, n) in &out.points {
+        let outward = (*p - DVec2::new(0.1, -0.05)).normalize();
+        assert!(n.dot(outward) > 0.5, "{p} {n}");
+        alignment += n.dot(outward) / out.points.len() as f64;
+    }
+    assert!(alignment > 0.99, "{alignment}");
+}
+
+#[test]
+fn a_square_with_a_hole_has_two_loops_and_beats_marching_squares() {
+    let samples = grid_samples(32, square_with_hole);
+    let out = plane::reconstruct(&samples, &Params::default()).expect("curve");
+    assert_eq!(out.curve.loops(), 2);
+    assert!(out.curve.is_closed());
+    let index = PolylineIndex::new(&out.curve);
+    assert_eq!(index.winding(DVec2::new(0.15, 0.1)), 0, "the hole is outside");
+    assert_eq!(index.winding(DVec2::new(-0.4, -0.4)), 1, "the material is inside");
+    let (mean, max) = vertex_error(&out.curve, square_with_hole);
+    let grid = *samples.as_grid().expect("grid");
+    let ms = rfta_mc::marching_squares(&grid, samples.values(), 0.0);
+    // The corners are sharp: the reconstruction rounds them, within a tenth of a spacing.
+    assert!(mean < 0.002 && max < 0.1 * 0.0625, "{mean} {max}");
+    // Chamfer against the exact boundary, sampled finely: below marching squares' (whose vertices
+    // lie on the curve, but whose edges cut the corners).
+    let exact = exact_boundary(2000);
+    let ours = rfta_metrics::plane::chamfer_2d(&out.curve, &exact, 20_000);
+    let theirs = rfta_metrics::plane::chamfer_2d(&ms, &exact, 20_000);
+    assert!(ours < theirs, "{ours} vs {theirs}");
+}
+
+/// The boundary of [`square_with_hole`] as polylines with `k` vertices per loop.
+fn exact_boundary(k: usize) -> Polylines {
+    let mut v = Vec::new();
+    let mut e = Vec::new();
+    for i in 0..k {
+        let t = i as f64 / k as f64 * 4.0;
+        let side = t.floor();
+        let f = t - side;
+        let p = match side as u32 {
+            0 => DVec2::new(-0.6 + 1.2 * f, -0.6),
+            1 => DVec2::new(0.6, -0.6 + 1.2 * f),
+            2 => DVec2::new(0.6 - 1.2 * f, 0.6),
+            _ => DVec2::new(-0.6, 0.6 - 1.2 * f),
+        };
+        v.push(p);
+        e.push([i as u32, ((i + 1) % k) as u32]);
+    }
+    for i in 0..k {
+        let t = -(i as f64) / k as f64 * std::f64::consts::TAU;
+        v.push(DVec2::new(0.15, 0.1) + DVec2::new(t.cos(), t.sin()) * 0.25);
+        e.push([(k + i) as u32, (k + (i + 1) % k) as u32]);
+    }
+    Polylines::new(v, e).expect("valid")
+}
+
+#[test]
+fn the_curve_is_the_same_at_any_thread_count() {
+    let samples = grid_samples(24, square_with_hole);
+    let run = |threads| {
+        let params = Params {
+            threads: Some(threads),
+            ..Params::default()
+        };
+        plane::reconstruct(&samples, &params).expect("curve").curve
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(4));
+}
+
+#[test]
+fn samples_that_leave_no_room_for_a_curve_are_no_surface() {
+    // Every sample 5 away from a curve that is nowhere: circles cover the whole box.
+    let samples = grid_samples(8, |_| 5.0);
+    match plane::reconstruct(&samples, &Params::default()) {
+        Err(rfta::Error::NoSurface { .. }) => {}
+        other => panic!("expected NoSurface, got {other:?}"),
+    }
+}
