@@ -29,10 +29,11 @@ cargo xtask <command>
 
 commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --scenario noise,clamp,scattered,swept,collision,params --quick
+            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
+            [--2d: the 2D pipeline and marching squares on inputs2d, --res 16,32,64]
             [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]: Table 2 with marching
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
             chamfer.svg, contact_sheet.png); --depth and --owner-band override the rfta methods'
@@ -181,6 +182,17 @@ fn ci(root: &Path) -> Result<()> {
             "mc,rfta".to_string(),
             "--out".to_string(),
             root.join("target/eval/ci-quick").display().to_string(),
+        ],
+    )?;
+    println!("==> eval --2d --res 16,32");
+    eval::run(
+        root,
+        &[
+            "--2d".to_string(),
+            "--res".to_string(),
+            "16,32".to_string(),
+            "--out".to_string(),
+            root.join("target/eval/ci-2d").display().to_string(),
         ],
     )?;
     println!("==> eval --scenario noise,clamp,scattered,swept,collision,params --quick");

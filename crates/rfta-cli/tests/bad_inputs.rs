@@ -82,10 +82,16 @@ fn unreadable_and_malformed_files_are_errors_naming_file_and_problem() {
         // A 3D grid saved as 2D is read as 2D, and its values are no 2D distance.
         ("shape_2d.npy", "too few for a surface"),
         ("nan_2d.npy", "SDF value at sample 10 is not finite (NaN)"),
-        ("pixel_1.png", "a 2D grid needs at least 2 points per axis, got [1, 1]"),
+        (
+            "pixel_1.png",
+            "a 2D grid needs at least 2 points per axis, got [1, 1]",
+        ),
         ("gray_8bit.png", "expected a 16-bit grayscale PNG"),
         ("no_range.png", "needs the value range in its sidecar"),
-        ("ragged_2d.csv", "line 4: expected 3 numbers (x y s), found 4"),
+        (
+            "ragged_2d.csv",
+            "line 4: expected 3 numbers (x y s), found 4",
+        ),
         ("shape_4d.npy", "found shape [13, 13, 13, 1]"),
         ("truncated.npy", "(truncated file)"),
         ("header_only.npy", "(truncated file)"),

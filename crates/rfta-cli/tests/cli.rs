@@ -320,10 +320,16 @@ fn two_dimensional_input_gives_polylines() {
         assert!(curve.is_closed(), "{cmd}");
         assert!(text.lines().any(|l| l.starts_with("l ")));
         for v in text.lines().filter(|l| l.starts_with("v ")) {
-            let f: Vec<f64> = v[2..].split(' ').map(|t| t.parse().expect("number")).collect();
+            let f: Vec<f64> = v[2..]
+                .split(' ')
+                .map(|t| t.parse().expect("number"))
+                .collect();
             assert_eq!(f.len(), 3);
             assert_eq!(f[2], 0.0);
-            assert!(((f[0] * f[0] + f[1] * f[1]).sqrt() - 0.5).abs() < 0.01, "{cmd}: {v}");
+            assert!(
+                ((f[0] * f[0] + f[1] * f[1]).sqrt() - 0.5).abs() < 0.01,
+                "{cmd}: {v}"
+            );
         }
     }
     for ext in ["svg", "csv"] {
@@ -336,7 +342,11 @@ fn two_dimensional_input_gives_polylines() {
     // A mesh extension is refused for 2D input, before any work.
     let o = rfta(&["reconstruct", s(&input), "-o", s(&dir.join("x.ply"))]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("write .obj, .svg or .csv"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("write .obj, .svg or .csv"),
+        "{}",
+        stderr(&o)
+    );
     let demo = dir.join("demo.svg");
     let o = rfta(&["demo", "--2d", "-o", s(&demo)]);
     assert!(o.status.success(), "{}", stderr(&o));

@@ -763,4 +763,51 @@ mod tests {
         assert!(Samples2::scattered(p, vec![1.0, 2.0, -1.0]).is_err());
         assert!(Polylines::new(vec![DVec2::ZERO], vec![[0, 1]]).is_err());
     }
+
+    #[test]
+    fn contour_vertices_are_exactly_the_crossed_grid_edges() {
+        // Brute force: every grid edge whose ends are on different sides of the iso-value holds
+        // one vertex, at the linear interpolation; and every vertex is used by two edges.
+        let grid = Grid2::from_bounds([19, 23], DVec2::new(-1.0, -1.2), DVec2::new(1.1, 1.0))
+            .expect("valid test input");
+        let mut rng = crate::rng::Rng::new(5);
+        let values: Vec<f64> = (0..grid.len())
+            .map(|i| {
+                let p = grid.position(i);
+                (3.0 * p.x).sin() + (2.0 * p.y).cos() - 0.3 + 0.1 * rng.next_f64()
+            })
+            .collect();
+        let c = contour(&grid, &values, 0.0);
+        let [nx, ny] = grid.dims();
+        let mut expected = Vec::new();
+        for i in 0..nx {
+            for j in 0..ny {
+                for (di, dj) in [(1, 0), (0, 1)] {
+                    let (a, b) = (grid.index(i, j), (i + di) * ny + j + dj);
+                    if i + di >= nx || j + dj >= ny || (values[a] < 0.0) == (values[b] < 0.0) {
+                        continue;
+                    }
+                    let t = values[a] / (values[a] - values[b]);
+                    expected.push(grid.position(a) + (grid.position(b) - grid.position(a)) * t);
+                }
+            }
+        }
+        assert_eq!(c.vertices.len(), expected.len());
+        for e in &expected {
+            assert!(c.vertices.iter().any(|v| (*v - *e).length() < 1e-12), "{e}");
+        }
+        let mut uses = vec![0; c.vertices.len()];
+        for &[a, b] in &c.edges {
+            uses[a as usize] += 1;
+            uses[b as usize] += 1;
+        }
+        // Vertices on the grid's border end open loops there; every other one joins two edges.
+        for (v, &n) in c.vertices.iter().zip(&uses) {
+            let border = (v.x - -1.0).abs() < 1e-12
+                || (v.x - 1.1).abs() < 1e-12
+                || (v.y - -1.2).abs() < 1e-12
+                || (v.y - 1.0).abs() < 1e-12;
+            assert!(n == 2 || (border && n == 1), "{v}: {n}");
+        }
+    }
 }

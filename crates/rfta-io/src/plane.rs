@@ -405,3 +405,81 @@ pub fn write_svg(path: &Path, svg: Svg) -> Result<()> {
     let text = svg.finish();
     write_atomic(path, |w| w.write_all(text.as_bytes()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(tag: &str) -> std::path::PathBuf {
+        let p = std::env::temp_dir().join(format!("rfta-io-plane-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).expect("temp dir");
+        p
+    }
+
+    #[test]
+    fn a_png_is_read_with_image_up_as_plus_y_and_its_value_range() {
+        let dir = temp("png");
+        let path = dir.join("sdf.png");
+        // 3 wide, 2 high; row 0 is the top. Pixel (row, col) = 1000 * (3 * row + col).
+        let (w, h) = (3u32, 2u32);
+        let pixels: Vec<u16> = (0..6).map(|k| 1000 * k).collect();
+        let mut bytes = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut bytes, w, h);
+            enc.set_color(png::ColorType::Grayscale);
+            enc.set_depth(png::BitDepth::Sixteen);
+            let mut writer = enc.write_header().expect("header");
+            let data: Vec<u8> = pixels.iter().flat_map(|p| p.to_be_bytes()).collect();
+            writer.write_image_data(&data).expect("data");
+        }
+        std::fs::write(&path, &bytes).expect("write");
+        std::fs::write(
+            dir.join("sdf.json"),
+            r#"{"min": [0, 0], "max": [2, 1], "values": [-1, 1]}"#,
+        )
+        .expect("sidecar");
+        let s = read_sdf_2d(&path, None).expect("read");
+        let grid = s.as_grid().expect("grid");
+        assert_eq!(grid.dims(), [3, 2]);
+        // S[i, j] at (x_i, y_j): (col, rows - 1 - row), so S[0, 1] is the top-left pixel (0) and
+        // S[2, 0] the bottom-right one (5000).
+        let value = |u: u16| -1.0 + 2.0 * f64::from(u) / 65535.0;
+        assert_eq!(s.values()[grid.index(0, 1)], value(0));
+        assert_eq!(s.values()[grid.index(2, 0)], value(5000));
+        assert_eq!(s.values()[grid.index(1, 0)], value(4000));
+        assert_eq!(grid.position(grid.index(2, 1)), DVec2::new(2.0, 1.0));
+    }
+
+    #[test]
+    fn npy_csv_and_polylines_round_trip() {
+        let dir = temp("rt");
+        // A grid of shape (3, 5): S[i, j] = 10 i + j - 15. (Shape (n, 4) is 3D scattered rows.)
+        let values: Vec<f64> = (0..15)
+            .map(|k| (10 * (k / 5) + k % 5) as f64 - 15.0)
+            .collect();
+        let npy_path = dir.join("g.npy");
+        write_atomic(&npy_path, |w| npy::write_npy_f64(w, &[3, 5], &values)).expect("npy");
+        assert!(is_sdf_2d(&npy_path).expect("peek"));
+        let s = read_sdf_2d(&npy_path, Some((DVec2::ZERO, DVec2::new(2.0, 3.0)))).expect("read");
+        let g = s.as_grid().expect("grid");
+        assert_eq!(g.dims(), [3, 5]);
+        assert_eq!(s.values()[g.index(2, 1)], 6.0);
+        assert_eq!(g.spacing(), DVec2::new(1.0, 0.75));
+        let csv = dir.join("s.csv");
+        std::fs::write(&csv, "x,y,s\n0,0,-1\n1,0,0.5\n0,1,0.25\n").expect("csv");
+        assert!(is_sdf_2d(&csv).expect("peek"));
+        let s = read_sdf_2d(&csv, None).expect("csv");
+        assert_eq!(s.positions()[2], DVec2::new(0.0, 1.0));
+        assert_eq!(s.values(), &[-1.0, 0.5, 0.25]);
+        let square = Polylines::new(
+            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
+            vec![[0, 1], [1, 2], [2, 3], [3, 0]],
+        )
+        .expect("square");
+        let obj = dir.join("c.obj");
+        write_polylines(&obj, &square).expect("obj");
+        assert_eq!(read_polylines(&obj).expect("back"), square);
+        assert!(write_polylines(&dir.join("c.ply"), &square).is_err());
+    }
+}

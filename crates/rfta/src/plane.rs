@@ -287,7 +287,10 @@ fn drop_islands(
     }
     let mut loops: std::collections::BTreeMap<usize, Vec<[u32; 2]>> = Default::default();
     for &e in &curve.edges {
-        loops.entry(root(&mut parent, e[0] as usize)).or_default().push(e);
+        loops
+            .entry(root(&mut parent, e[0] as usize))
+            .or_default()
+            .push(e);
     }
     let whole = PolylineIndex::new(&curve);
     let mut keep = vec![true; loops.len()];
@@ -298,7 +301,12 @@ fn drop_islands(
         };
         let (lo, hi) = edges.iter().flatten().fold(
             (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &v| (lo.min(curve.vertices[v as usize]), hi.max(curve.vertices[v as usize])),
+            |(lo, hi), &v| {
+                (
+                    lo.min(curve.vertices[v as usize]),
+                    hi.max(curve.vertices[v as usize]),
+                )
+            },
         );
         if (hi - lo).length() >= min_island * spacing {
             continue;
@@ -327,7 +335,12 @@ fn drop_islands(
             let rest = if edges.contains(&curve.edges[whole.closest(c.center).edge]) {
                 let others = Polylines {
                     vertices: curve.vertices.clone(),
-                    edges: curve.edges.iter().filter(|e| !edges.contains(e)).copied().collect(),
+                    edges: curve
+                        .edges
+                        .iter()
+                        .filter(|e| !edges.contains(e))
+                        .copied()
+                        .collect(),
                 };
                 PolylineIndex::new(&others).closest(c.center).distance
             } else {

@@ -50,7 +50,11 @@ fn a_circle_comes_back_as_one_loop_on_it() {
     // The tangency points: each sample circle touches the true curve at one point, which the
     // fine-tuning moves its points toward (a small circle's free arc can hold a point a little
     // off it, its normal turned by up to the arc); their normals point out.
-    let far = out.points.iter().map(|(p, _)| circle(*p).abs()).fold(0.0, f64::max);
+    let far = out
+        .points
+        .iter()
+        .map(|(p, _)| circle(*p).abs())
+        .fold(0.0, f64::max);
     assert!(far < 0.1 * 0.0625, "{far}");
     let mut alignment = 0.0;
     for (p, n) in &out.points {
@@ -68,8 +72,16 @@ fn a_square_with_a_hole_has_two_loops_and_beats_marching_squares() {
     assert_eq!(out.curve.loops(), 2);
     assert!(out.curve.is_closed());
     let index = PolylineIndex::new(&out.curve);
-    assert_eq!(index.winding(DVec2::new(0.15, 0.1)), 0, "the hole is outside");
-    assert_eq!(index.winding(DVec2::new(-0.4, -0.4)), 1, "the material is inside");
+    assert_eq!(
+        index.winding(DVec2::new(0.15, 0.1)),
+        0,
+        "the hole is outside"
+    );
+    assert_eq!(
+        index.winding(DVec2::new(-0.4, -0.4)),
+        1,
+        "the material is inside"
+    );
     let (mean, max) = vertex_error(&out.curve, square_with_hole);
     let grid = *samples.as_grid().expect("grid");
     let ms = rfta_mc::marching_squares(&grid, samples.values(), 0.0);
@@ -131,4 +143,21 @@ fn samples_that_leave_no_room_for_a_curve_are_no_surface() {
         Err(rfta::Error::NoSurface { .. }) => {}
         other => panic!("expected NoSurface, got {other:?}"),
     }
+}
+
+#[test]
+fn scattered_samples_give_the_circle_too() {
+    // 800 samples at seeded random positions in [-1, 1]^2: every circle owns points (no owner
+    // band off a grid); the vertices stay within a twentieth of the mean sample spacing
+    // (about 2 / sqrt(800) = 0.07) of the circle.
+    let mut rng = rfta::geom::rng::Rng::new(3);
+    let positions: Vec<DVec2> = (0..800)
+        .map(|_| DVec2::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0))
+        .collect();
+    let values = positions.iter().map(|&p| circle(p)).collect();
+    let samples = Samples2::scattered(positions, values).expect("samples");
+    let out = plane::reconstruct(&samples, &Params::default()).expect("curve");
+    assert_eq!(out.curve.loops(), 1);
+    let (mean, max) = vertex_error(&out.curve, circle);
+    assert!(mean < 0.07 / 100.0 && max < 0.07 / 20.0, "{mean} {max}");
 }

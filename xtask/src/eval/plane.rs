@@ -19,8 +19,17 @@ use rfta_metrics::plane::{chamfer_2d, hausdorff_2d};
 /// Samples per polyline set for the Chamfer distance (the reference's).
 const SAMPLES: usize = 100_000;
 
-/// The reference's rows: (method, n) -> (Chamfer, CPU seconds, loop count right) per shape.
-type Reference = BTreeMap<(String, usize), Vec<(f64, f64, bool)>>;
+/// One reference row: the shape, its Chamfer, CPU seconds and loop count.
+struct RefRow {
+    shape: String,
+    chamfer: f64,
+    cpu: f64,
+    loops: usize,
+    right: bool,
+}
+
+/// The reference's rows by (method, n).
+type Reference = BTreeMap<(String, usize), Vec<RefRow>>;
 
 /// The methods compared.
 #[derive(Clone, Copy)]
@@ -157,12 +166,18 @@ fn reference_rows(path: &Path, names: &[String]) -> Reference {
         if f.len() < 10 || !names.iter().any(|n| n == f[0]) {
             continue;
         }
-        let (Ok(n), Ok(cpu), Ok(ch)) = (f[1].parse(), f[4].parse(), f[5].parse()) else {
+        let (Ok(n), Ok(cpu), Ok(chamfer), Ok(loops)) =
+            (f[1].parse(), f[4].parse(), f[5].parse(), f[8].parse())
+        else {
             continue;
         };
-        out.entry((f[2].to_string(), n))
-            .or_default()
-            .push((ch, cpu, f[8] == f[9]));
+        out.entry((f[2].to_string(), n)).or_default().push(RefRow {
+            shape: f[0].to_string(),
+            chamfer,
+            cpu,
+            loops,
+            right: f[8] == f[9],
+        });
     }
     out
 }
@@ -194,9 +209,9 @@ fn report(rows: &[Row2], reference: &Reference) -> String {
                 of.len() - ok.len()
             );
             if let Some(r) = reference.get(&(method.to_string(), n)) {
-                let mean = r.iter().map(|x| x.0).sum::<f64>() / r.len() as f64;
-                let right = r.iter().filter(|x| x.2).count();
-                let mut cpu: Vec<f64> = r.iter().map(|x| x.1).collect();
+                let mean = r.iter().map(|x| x.chamfer).sum::<f64>() / r.len() as f64;
+                let right = r.iter().filter(|x| x.right).count();
+                let mut cpu: Vec<f64> = r.iter().map(|x| x.cpu).collect();
                 cpu.sort_by(f64::total_cmp);
                 let _ = writeln!(
                     s,
@@ -206,6 +221,44 @@ fn report(rows: &[Row2], reference: &Reference) -> String {
                     cpu[cpu.len() / 2]
                 );
             }
+        }
+    }
+    s.push_str(
+        "\nPer shape: Chamfer (loops; the ground truth's in the header), ours and gpytoolbox's.\n\n\
+         | shape | samples | gt loops | ms | ms (gpytoolbox) | rfta | rfta (gpytoolbox) |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    let cell = |r: Option<&Row2>| {
+        r.map_or("-".to_string(), |r| {
+            format!("{:.5} ({})", r.chamfer, r.loops)
+        })
+    };
+    let theirs = |method: &str, n: usize, shape: &str| {
+        reference
+            .get(&(method.to_string(), n))
+            .and_then(|v| v.iter().find(|x| x.shape == shape))
+            .map_or("-".to_string(), |x| {
+                format!("{:.5} ({})", x.chamfer, x.loops)
+            })
+    };
+    let mut shapes: Vec<&str> = rows.iter().map(|r| r.shape.as_str()).collect();
+    shapes.dedup();
+    for shape in shapes {
+        for &n in &ns {
+            let find = |m: &str| {
+                rows.iter()
+                    .find(|r| r.shape == shape && r.n == n && r.method == m)
+            };
+            let gt = find("rfta").map_or(0, |r| r.gt_loops);
+            let _ = writeln!(
+                s,
+                "| {shape} | {}^2 | {gt} | {} | {} | {} | {} |",
+                n + 1,
+                cell(find("ms")),
+                theirs("ms", n, shape),
+                cell(find("rfta")),
+                theirs("rfta", n, shape)
+            );
         }
     }
     s
