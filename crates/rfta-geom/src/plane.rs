@@ -81,6 +81,32 @@ impl Grid2 {
         Self::new(dims, min, (max - min) / cells)
     }
 
+    /// The grid whose points `positions` are, in any order, with each position's flat index in
+    /// it (as [`crate::Grid::fit`] in 3D): `None` unless every position is a grid point (to
+    /// 10^-6 of the spacing), each grid point appears once, and both axes have 2 points or more.
+    pub fn fit(positions: &[DVec2]) -> Option<(Self, Vec<usize>)> {
+        let lift: Vec<glam::DVec3> = positions.iter().map(|p| p.extend(0.0)).collect();
+        // A third axis of one point is not a 3D grid; fit x and y as the first two of three
+        // axes by giving z two layers, then map back.
+        let doubled: Vec<glam::DVec3> = lift
+            .iter()
+            .copied()
+            .chain(lift.iter().map(|p| glam::DVec3::new(p.x, p.y, 1.0)))
+            .collect();
+        let (grid, index) = crate::Grid::fit(&doubled)?;
+        let [nx, ny, _] = grid.dims();
+        let spacing = grid.spacing();
+        let g = Self::new(
+            [nx, ny],
+            grid.origin().truncate(),
+            DVec2::new(spacing.x, spacing.y),
+        )
+        .ok()?;
+        // Flat 3D index (i * ny + j) * 2 + k with k = 0 for the first copy.
+        let index = index[..positions.len()].iter().map(|&i| i / 2).collect();
+        Some((g, index))
+    }
+
     /// Points per axis.
     pub fn dims(&self) -> [usize; 2] {
         self.dims
@@ -749,6 +775,22 @@ mod tests {
             assert_eq!(got.distance, brute, "at {p}");
             assert_eq!((got.point - p).length(), got.distance);
         }
+    }
+
+    #[test]
+    fn a_shuffled_grid_is_recognised() {
+        let grid = Grid2::from_bounds([4, 3], DVec2::new(-1.0, 0.0), DVec2::new(2.0, 1.0))
+            .expect("valid test input");
+        let order = [5, 0, 11, 3, 7, 1, 9, 2, 10, 4, 8, 6];
+        let positions: Vec<DVec2> = order.iter().map(|&i| grid.position(i)).collect();
+        let (fit, index) = Grid2::fit(&positions).expect("a grid");
+        assert_eq!(fit.dims(), [4, 3]);
+        assert!((fit.origin() - grid.origin()).length() < 1e-12);
+        assert!((fit.spacing() - grid.spacing()).length() < 1e-12);
+        assert_eq!(index, order.to_vec());
+        let mut off = positions.clone();
+        off[3].x += 0.1;
+        assert!(Grid2::fit(&off).is_none());
     }
 
     #[test]

@@ -23,7 +23,8 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use rfta::Stage;
-use rfta_geom::glam::DVec3;
+use rfta_geom::glam::{DVec2, DVec3};
+use rfta_geom::plane::{Grid2, Samples2};
 use rfta_geom::{Grid, OrientedPoints, SdfSamples, TriMesh};
 
 pyo3::create_exception!(
@@ -297,6 +298,76 @@ fn reconstruct<'py>(
     )
 }
 
+/// Reconstructs closed polylines from 2D samples: `values` (n,) at `positions` (n, 2), a grid
+/// when they are one (in any order). Returns `(V, E, P, N)`: vertices (m, 2), edges (k, 2) with
+/// the inside on the left, tangency points and normals (p, 2).
+#[pyfunction]
+#[pyo3(signature = (values, positions, preset="default", options=None))]
+fn reconstruct_2d<'py>(
+    py: Python<'py>,
+    values: PyReadonlyArray1<'py, f64>,
+    positions: PyReadonlyArray2<'py, f64>,
+    preset: &str,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let params = params(preset, options)?;
+    let values = values.as_slice()?.to_vec();
+    if positions.shape()[1] != 2 {
+        return Err(PyValueError::new_err(format!(
+            "U must have shape (n, 2), not {:?}",
+            positions.shape()
+        )));
+    }
+    let p: Vec<DVec2> = positions
+        .as_slice()?
+        .chunks_exact(2)
+        .map(|c| DVec2::new(c[0], c[1]))
+        .collect();
+    if p.len() != values.len() {
+        return Err(PyValueError::new_err(format!(
+            "U has {} points but S has {} values",
+            p.len(),
+            values.len()
+        )));
+    }
+    let samples = match Grid2::fit(&p) {
+        Some((grid, index)) => {
+            let mut on_grid = vec![0.0; values.len()];
+            for (&i, &v) in index.iter().zip(&values) {
+                on_grid[i] = v;
+            }
+            Samples2::grid(grid, on_grid)
+        }
+        None => Samples2::scattered(p, values),
+    }
+    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let out = py
+        .detach(|| rfta::plane::reconstruct(&samples, &params))
+        .map_err(error)?;
+    let flat = |v: &mut dyn Iterator<Item = f64>, n: usize| {
+        PyArray1::from_vec(py, v.collect()).reshape([n, 2])
+    };
+    let c = &out.curve;
+    let v = flat(
+        &mut c.vertices.iter().flat_map(|v| v.to_array()),
+        c.vertices.len(),
+    )?;
+    let e: Vec<i64> = c.edges.iter().flat_map(|e| e.map(i64::from)).collect();
+    let e = PyArray1::from_vec(py, e).reshape([c.edges.len(), 2])?;
+    let pts = flat(
+        &mut out.points.iter().flat_map(|p| p.0.to_array()),
+        out.points.len(),
+    )?;
+    let nrm = flat(
+        &mut out.points.iter().flat_map(|p| p.1.to_array()),
+        out.points.len(),
+    )?;
+    PyTuple::new(
+        py,
+        [v.into_any(), e.into_any(), pts.into_any(), nrm.into_any()],
+    )
+}
+
 /// The report as a dict (the names of `rfta::Report`'s fields).
 fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -448,6 +519,7 @@ fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("NoSurfaceError", m.py().get_type::<NoSurfaceError>())?;
     m.add_function(wrap_pyfunction!(reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(reconstruct_2d, m)?)?;
     m.add_function(wrap_pyfunction!(screened_poisson, m)?)?;
     m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(signed_distance, m)?)?;

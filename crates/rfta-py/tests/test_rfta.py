@@ -162,7 +162,8 @@ def test_bad_input_is_a_value_error():
         rfta.reach_for_the_arcs(U[:, :2].T, S)
     with pytest.raises(ValueError, match="values"):
         rfta.reach_for_the_arcs(U, S[:-1])
-    with pytest.raises(ValueError, match="not supported"):
+    # Dropping z leaves 2D samples with several values at one position.
+    with pytest.raises(ValueError, match="different values"):
         rfta.reach_for_the_arcs(U[:, :2], S)
     with pytest.raises(ValueError, match="3 dimension"):
         rfta.reconstruct(S)
@@ -174,6 +175,21 @@ def test_bad_input_is_a_value_error():
     rng = np.random.default_rng(1)
     with pytest.raises(ValueError, match="distance"):
         rfta.reconstruct(rng.uniform(-1, 1, (9, 9, 9)))
+
+
+def test_the_drop_in_reconstructs_2d_samples_as_closed_polylines():
+    # gpytoolbox's 2D call: U (n, 2) from a meshgrid, here a disc of radius 0.5 on 33^2 points.
+    g = np.linspace(-1.0, 1.0, 33)
+    U = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    S = np.linalg.norm(U - [0.1, 0.0], axis=1) - 0.5
+    V, E, P, N = rfta.reach_for_the_arcs(U, S, return_point_cloud=True)
+    assert V.shape[1] == 2 and E.shape[1] == 2 and E.dtype == np.int64
+    assert np.abs(np.linalg.norm(V - [0.1, 0.0], axis=1) - 0.5).max() < 0.01
+    # Closed: every vertex starts one edge and ends one; counter-clockwise (positive area).
+    assert sorted(E[:, 0]) == sorted(E[:, 1])
+    area = 0.5 * np.sum(V[E[:, 0], 0] * V[E[:, 1], 1] - V[E[:, 1], 0] * V[E[:, 0], 1])
+    assert abs(area - np.pi * 0.25) < 0.01
+    assert P.shape == N.shape and P.shape[1] == 2
 
 
 def test_no_surface_is_its_own_value_error():

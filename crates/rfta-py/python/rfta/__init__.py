@@ -265,9 +265,10 @@ def reach_for_the_arcs(
 
     Parameters
     ----------
-    U : (n, 3) array
+    U : (n, 3) or (n, 2) array
         Sample positions: scattered, or the points of a grid in any order (a grid is recognised
-        and reconstructed as one, which is more accurate and faster).
+        and reconstructed as one, which is more accurate and faster). 2D samples give closed
+        polylines, as gpytoolbox's 2D mode.
     S : (n,) array
         The signed distance at each point, negative inside.
     rng_seed : int
@@ -311,13 +312,16 @@ def reach_for_the_arcs(
     V : (n, 3) float64 array
     F : (m, 3) int64 array
     P, N : (p, 3) float64 arrays, with ``return_point_cloud``: tangency points and normals.
+
+    In 2D, ``V`` is (n, 2), ``F`` the (m, 2) edges of closed polylines (inside on the left of
+    each edge), ``P`` and ``N`` (p, 2); ``screening_weight``, ``batch_size`` and the local
+    search's arguments have no counterpart there (every point lies on the exact free arcs of
+    its circle) and are ignored.
     """
     del force_cpu  # the CPU rasterizer always runs here
     U = _array("U", U, 2)
-    if U.shape[1] == 2:
-        raise ValueError("2D samples (U of shape (n, 2)) are not supported yet; rfta is 3D")
-    if U.shape[1] != 3:
-        raise ValueError(f"U must have shape (n, 3), not {U.shape}")
+    if U.shape[1] not in (2, 3):
+        raise ValueError(f"U must have shape (n, 3) or (n, 2), not {U.shape}")
     S = _array("S", S, 1)
     if S.shape[0] != U.shape[0]:
         raise ValueError(f"U has {U.shape[0]} points but S has {S.shape[0]} values")
@@ -344,7 +348,10 @@ def reach_for_the_arcs(
         clamp=None if not np.isfinite(clamp_value) else float(clamp_value),
         threads=None if parallel else 1,
     )
-    V, F, P, N, _ = _run(S, U, None, "default", options, _printer(verbose, None))
+    if U.shape[1] == 2:
+        V, F, P, N = _rfta.reconstruct_2d(S, U, "default", options)
+    else:
+        V, F, P, N, _ = _run(S, U, None, "default", options, _printer(verbose, None))
     if return_point_cloud:
         return V, F, P, N
     return V, F
