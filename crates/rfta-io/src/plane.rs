@@ -57,9 +57,15 @@ pub fn is_sdf_2d(path: &Path) -> Result<bool> {
                 .find(|l| {
                     !l.is_empty()
                         && !l.starts_with('#')
-                        && l.split([',', ' ', '\t']).any(|t| t.parse::<f64>().is_ok())
+                        && l.split([',', ';', ' ', '\t'])
+                            .any(|t| t.parse::<f64>().is_ok())
                 })
-                .is_some_and(|l| l.split([',', ' ', '\t']).filter(|t| !t.is_empty()).count() == 3))
+                .is_some_and(|l| {
+                    l.split([',', ';', ' ', '\t'])
+                        .filter(|t| !t.is_empty())
+                        .count()
+                        == 3
+                }))
         }
         _ => Ok(false),
     }
@@ -170,7 +176,7 @@ fn parse_rows(bytes: &[u8]) -> ParseResult<(Vec<DVec2>, Vec<f64>)> {
             continue;
         }
         let toks: Vec<&str> = line
-            .split([',', ' ', '\t'])
+            .split([',', ';', ' ', '\t'])
             .filter(|t| !t.is_empty())
             .collect();
         if toks.iter().all(|t| t.parse::<f64>().is_err()) && p.is_empty() {
