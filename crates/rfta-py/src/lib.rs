@@ -259,13 +259,7 @@ fn reconstruct<'py>(
                 )));
             }
             match Grid::fit(&p) {
-                Some((grid, index)) => {
-                    let mut on_grid = vec![0.0; values.len()];
-                    for (&i, &v) in index.iter().zip(&values) {
-                        on_grid[i] = v;
-                    }
-                    SdfSamples::grid(grid, on_grid)
-                }
+                Some((grid, index)) => SdfSamples::grid(grid, in_grid_order(&index, &values)),
                 None => SdfSamples::scattered(p, values),
             }
         }
@@ -331,13 +325,7 @@ fn reconstruct_2d<'py>(
         )));
     }
     let samples = match Grid2::fit(&p) {
-        Some((grid, index)) => {
-            let mut on_grid = vec![0.0; values.len()];
-            for (&i, &v) in index.iter().zip(&values) {
-                on_grid[i] = v;
-            }
-            Samples2::grid(grid, on_grid)
-        }
+        Some((grid, index)) => Samples2::grid(grid, in_grid_order(&index, &values)),
         None => Samples2::scattered(p, values),
     }
     .map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -366,6 +354,16 @@ fn reconstruct_2d<'py>(
         py,
         [v.into_any(), e.into_any(), pts.into_any(), nrm.into_any()],
     )
+}
+
+/// `values` given at the positions `Grid::fit` or `Grid2::fit` placed at `index`, in the grid's
+/// order.
+fn in_grid_order(index: &[usize], values: &[f64]) -> Vec<f64> {
+    let mut on_grid = vec![0.0; values.len()];
+    for (&i, &v) in index.iter().zip(values) {
+        on_grid[i] = v;
+    }
+    on_grid
 }
 
 /// The report as a dict (the names of `rfta::Report`'s fields).

@@ -185,10 +185,18 @@ pub fn reconstruct_cancellable(
 ) -> Result<Reconstruction> {
     params.validate()?;
     check_memory(samples.len(), params)?;
-    match params.threads {
-        // On a worker of the global pool (where the caller is not on one already): each
-        // parallel loop then forks from inside the pool instead of being injected into it.
-        None => rayon::scope(|_| run(samples, params, progress, cancel)),
+    on_pool(params.threads, || run(samples, params, progress, cancel))
+}
+
+/// Runs `work` on `threads` workers (`None`: on a worker of the global pool, where the caller
+/// is not on one already: each parallel loop then forks from inside the pool instead of being
+/// injected into it).
+pub(crate) fn on_pool<T: Send>(
+    threads: Option<usize>,
+    work: impl FnOnce() -> Result<T> + Send,
+) -> Result<T> {
+    match threads {
+        None => rayon::scope(|_| work()),
         Some(t) => rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build()
@@ -196,7 +204,7 @@ pub fn reconstruct_cancellable(
                 threads: t,
                 reason: e.to_string(),
             })?
-            .install(|| run(samples, params, progress, cancel)),
+            .install(work),
     }
 }
 

@@ -82,17 +82,7 @@ pub struct Reconstruction2 {
 /// curve needs, [`Error::TooFewPoints`], [`Error::ThreadPool`].
 pub fn reconstruct(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     params.validate()?;
-    match params.threads {
-        None => rayon::scope(|_| run(samples, params)),
-        Some(t) => rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| Error::ThreadPool {
-                threads: t,
-                reason: e.to_string(),
-            })?
-            .install(|| run(samples, params)),
-    }
+    crate::on_pool(params.threads, || run(samples, params))
 }
 
 fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
