@@ -34,7 +34,7 @@ pub(crate) enum Gpu {
 #[derive(Debug, clap::Args)]
 pub(crate) struct Args {
     /// SDF samples: a grid (.npy, .exr) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
-    /// 2D samples are detected: .npy of shape (nx, ny) or (n, 3), .csv rows x y s, 16-bit .png.
+    /// 2D samples are detected: .npy of shape (nx, ny) or (n, 3), .csv rows x y s, 16-bit .png, .exr images.
     input: PathBuf,
     /// Output mesh (.obj .ply .stl .glb); for 2D input, polylines (.obj .svg .csv).
     #[arg(short, long)]

@@ -35,7 +35,9 @@ fn max_declared_bytes(len: usize) -> u64 {
     (len as u64).saturating_mul(1100).saturating_add(64 << 20)
 }
 
-pub(crate) fn parse(bytes: &[u8]) -> ParseResult<ExrVolume> {
+/// The first layer of an EXR file and its SDF channel (named `sdf`, or the only one), after
+/// refusing headers that declare more pixels than the file can hold.
+fn first_layer(bytes: &[u8]) -> ParseResult<(Layer<AnyChannels<FlatSamples>>, usize)> {
     // The exr crate allocates every declared layer before reading a byte of pixel data: a
     // 200-byte header declaring a 40 GB image must be refused from the header.
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
@@ -62,25 +64,58 @@ pub(crate) fn parse(bytes: &[u8]) -> ParseResult<ExrVolume> {
         .map_err(|e| ParseError::new(format!("invalid OpenEXR file: {e}")))?;
     let layer = image
         .layer_data
-        .first()
+        .into_iter()
+        .next()
         .ok_or_else(|| ParseError::new("the EXR file has no layers"))?;
     let channels = &layer.channel_data.list;
     let channel = channels
         .iter()
-        .find(|c| c.name.as_slice() == b"sdf")
-        .or_else(|| {
-            if channels.len() == 1 {
-                channels.first()
-            } else {
-                None
-            }
-        })
+        .position(|c| c.name.as_slice() == b"sdf")
+        .or_else(|| (channels.len() == 1).then_some(0))
         .ok_or_else(|| {
             ParseError::new(format!(
                 "the EXR layer has {} channels and none is named 'sdf'",
                 channels.len()
             ))
         })?;
+    Ok((layer, channel))
+}
+
+/// Whether the EXR file is a 2D image (its first layer has no `rfta_dims`), from its header.
+pub(crate) fn is_image(header: impl std::io::Read) -> ParseResult<bool> {
+    let meta = exr::meta::MetaData::read_from_buffered(header, false)
+        .map_err(|e| ParseError::new(format!("invalid OpenEXR file: {e}")))?;
+    Ok(meta.headers.first().is_some_and(|h| {
+        !h.own_attributes
+            .other
+            .keys()
+            .any(|k| k.as_slice() == b"rfta_dims")
+    }))
+}
+
+/// A 2D grid from an EXR image without `rfta_dims`: its SDF channel's values, pixel
+/// `(x = col, y = row)` at grid point `(col, height - 1 - row)` (image up is `+y`), in the 2D
+/// grids' C order. Returns the dims `[width, height]` and the values.
+pub(crate) fn parse_image(bytes: &[u8]) -> ParseResult<([usize; 2], Vec<f64>)> {
+    let (layer, channel) = first_layer(bytes)?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let pixels: Vec<f64> = layer.channel_data.list[channel]
+        .sample_data
+        .values_as_f32()
+        .map(f64::from)
+        .collect();
+    let mut values = Vec::with_capacity(w * h);
+    for col in 0..w {
+        for j in 0..h {
+            values.push(pixels[(h - 1 - j) * w + col]);
+        }
+    }
+    Ok(([w, h], values))
+}
+
+pub(crate) fn parse(bytes: &[u8]) -> ParseResult<ExrVolume> {
+    let (layer, channel) = first_layer(bytes)?;
+    let channel = &layer.channel_data.list[channel];
     let attrs = &layer.attributes.other;
     let dims = match get(attrs, "rfta_dims") {
         Some(AttributeValue::IntVec3((x, y, z))) => {

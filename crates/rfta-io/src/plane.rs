@@ -1,11 +1,13 @@
 //! 2D formats: SDF samples in (`.npy` grids of shape `(nx, ny)` or rows `(n, 3)` of `x y s`,
-//! CSV/text rows `x y s`, 16-bit grayscale PNG images), polylines out (OBJ with `l` elements,
-//! SVG for looking, CSV) and back in (OBJ).
+//! CSV/text rows `x y s`, 16-bit grayscale PNG images, OpenEXR images (one float channel, or the
+//! one named `sdf`; an EXR with `rfta_dims` is a 3D volume)), polylines out (OBJ with `l`
+//! elements, SVG for looking, CSV) and back in (OBJ).
 //!
 //! Grids follow the 3D conventions: `S[i, j]` at `(x_i, y_j)`, bounds from the JSON sidecar
 //! (`{"min": [x, y], "max": [x, y]}` or `{"origin": [x, y], "spacing": [x, y]}`), else the
 //! caller's, else `[-1, 1]^2`. A PNG's pixel `(row, col)` is `S[col, rows - 1 - row]` (image up is
 //! `+y`), and its values need `"values": [lo, hi]` in the sidecar: 0 maps to `lo`, 65535 to `hi`.
+//! An EXR image is laid out as a PNG and holds the values themselves.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -15,7 +17,7 @@ use rfta_geom::plane::{Grid2, Polylines, Samples2};
 
 use crate::error::{ParseError, ParseResult};
 use crate::text::{as_text, parse_f64};
-use crate::{Error, Result, extension, npy, read_bytes, sidecar_path, write_atomic};
+use crate::{Error, Result, exr_volume, extension, npy, read_bytes, sidecar_path, write_atomic};
 
 /// The 2D sidecar beside a grid file.
 #[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
@@ -36,6 +38,13 @@ struct Sidecar2 {
 pub fn is_sdf_2d(path: &Path) -> Result<bool> {
     match extension(path).as_deref() {
         Some("png") => Ok(true),
+        Some("exr") => {
+            let file = std::fs::File::open(path).map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+            exr_volume::is_image(std::io::BufReader::new(file)).map_err(|e| e.at(path))
+        }
         Some("npy") => {
             use std::io::Read;
             let mut head = Vec::new();
@@ -157,10 +166,14 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
                     .collect(),
             )
         }
+        Some("exr") => {
+            let (dims, values) = exr_volume::parse_image(&bytes).map_err(|e| e.at(path))?;
+            Samples2::grid(grid(dims)?.0, values)
+        }
         _ => {
             return Err(Error::UnknownFormat {
                 path: path.to_path_buf(),
-                expected: "2D samples: .npy, .csv/.txt (x y s), .png (16-bit grayscale)",
+                expected: "2D samples: .npy, .csv/.txt (x y s), .png (16-bit grayscale), .exr (image)",
             });
         }
     };
@@ -455,6 +468,39 @@ mod tests {
         assert_eq!(s.values()[grid.index(2, 0)], value(5000));
         assert_eq!(s.values()[grid.index(1, 0)], value(4000));
         assert_eq!(grid.position(grid.index(2, 1)), DVec2::new(2.0, 1.0));
+    }
+
+    #[test]
+    fn an_exr_image_is_a_2d_grid_and_an_exr_volume_is_not() {
+        use exr::prelude::*;
+        let dir = temp("exr");
+        // 3 wide, 2 high, one float channel "Y": row 0 is the top; pixel (row, col) = 3 row + col.
+        let pixels: Vec<f32> = (0..6).map(|k| k as f32 - 2.5).collect();
+        let channel = AnyChannel::new("Y", FlatSamples::F32(pixels));
+        let layer = Layer::new(
+            (3, 2),
+            LayerAttributes::named("sdf"),
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(smallvec::smallvec![channel]),
+        );
+        let path = dir.join("img.exr");
+        Image::from_layer(layer)
+            .write()
+            .to_file(&path)
+            .expect("write exr");
+        assert!(is_sdf_2d(&path).expect("peek"));
+        let s = read_sdf_2d(&path, Some((DVec2::ZERO, DVec2::new(2.0, 1.0)))).expect("read");
+        let g = s.as_grid().expect("grid");
+        assert_eq!(g.dims(), [3, 2]);
+        // S[i, j] at (col, rows - 1 - row): S[0, 1] is the top-left pixel, S[2, 0] the bottom-right.
+        assert_eq!(s.values()[g.index(0, 1)], -2.5);
+        assert_eq!(s.values()[g.index(2, 0)], 2.5);
+        // A volume written by rfta (rfta_dims) stays 3D.
+        let vol = dir.join("vol.exr");
+        let grid = rfta_geom::Grid::cube(2, -1.0, 1.0).expect("grid");
+        let values: Vec<f64> = (0..grid.len()).map(|i| i as f64 - 13.5).collect();
+        crate::write_sdf_grid(&vol, &grid, &values).expect("volume");
+        assert!(!is_sdf_2d(&vol).expect("peek"));
     }
 
     #[test]
