@@ -18,14 +18,85 @@ macro_rules! out {
     };
 }
 
+/// 2D samples: count, grid or scattered, bounds, signs and value range.
+fn describe_2d(path: &Path, s: &rfta_geom::plane::Samples2) -> Result<()> {
+    out!("{}: 2D SDF samples", path.display());
+    match s.as_grid() {
+        Some(g) => {
+            let [nx, ny] = g.dims();
+            out!("  grid        {nx} x {ny} ({} samples)", s.len());
+            out!("  spacing     {} {}", g.spacing().x, g.spacing().y);
+        }
+        None => out!("  scattered   {} samples", s.len()),
+    }
+    let (lo, hi) = s.bounds();
+    out!("  bounds      ({}, {}) .. ({}, {})", lo.x, lo.y, hi.x, hi.y);
+    let v = s.values();
+    let negative = v.iter().filter(|&&x| x < 0.0).count();
+    let (min, max) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    out!(
+        "  values      {min} .. {max}; {negative} negative (inside), {} zero or positive",
+        v.len() - negative
+    );
+    Ok(())
+}
+
+/// Polylines: counts, loops, closed or not, length, bounds.
+fn describe_polylines(path: &Path, c: &rfta_geom::plane::Polylines) -> Result<()> {
+    out!("{}: polylines", path.display());
+    out!("  vertices    {}", c.vertices.len());
+    out!("  edges       {}", c.edges.len());
+    let mut degree = vec![0u32; c.vertices.len()];
+    for &[a, b] in &c.edges {
+        degree[a as usize] += 1;
+        degree[b as usize] += 1;
+    }
+    let shape = if c.is_closed() {
+        "closed, inside on the left"
+    } else if degree.iter().all(|&d| d == 0 || d == 2) {
+        "closed, edges not consistently directed"
+    } else {
+        "open"
+    };
+    out!("  loops       {} ({shape})", c.loops());
+    out!("  length      {}", c.length());
+    let (lo, hi) = c.vertices.iter().fold(
+        (
+            rfta_geom::glam::DVec2::splat(f64::INFINITY),
+            rfta_geom::glam::DVec2::splat(f64::NEG_INFINITY),
+        ),
+        |(a, b), &v| (a.min(v), b.max(v)),
+    );
+    out!("  bounds      ({}, {}) .. ({}, {})", lo.x, lo.y, hi.x, hi.y);
+    Ok(())
+}
+
 pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<()> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
+    if matches!(ext.as_str(), "npy" | "exr" | "csv" | "xyz" | "txt" | "png")
+        && rfta_io::is_sdf_2d(path)?
+    {
+        let b = bounds.map(|b| (b.min.truncate(), b.max.truncate()));
+        return describe_2d(path, &rfta_io::read_sdf_2d(path, b)?);
+    }
     match ext.as_str() {
-        "obj" | "off" | "stl" | "glb" => describe_mesh(path, &rfta_io::read_mesh(path)?),
+        "obj" => {
+            let mesh = rfta_io::read_mesh(path)?;
+            let lines = rfta_io::read_polylines(path)?;
+            if mesh.is_empty() && !lines.is_empty() {
+                return describe_polylines(path, &lines);
+            }
+            describe_mesh(path, &mesh)
+        }
+        "off" | "stl" | "glb" => describe_mesh(path, &rfta_io::read_mesh(path)?),
         "npy" | "exr" | "csv" | "xyz" | "txt" => {
             describe_sdf(path, rfta_io::read_sdf(path, bounds)?)
         }

@@ -339,6 +339,13 @@ fn two_dimensional_input_gives_polylines() {
         let text = std::fs::read_to_string(&out).expect("written");
         assert!(text.starts_with(if ext == "svg" { "<svg" } else { "x0,y0,x1,y1" }));
     }
+    // `info` knows both.
+    let o = rfta(&["info", s(&input)]);
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(text.contains("2D SDF samples") && text.contains("21 x 21"), "{text}");
+    let o = rfta(&["info", s(&dir.join("curve.obj"))]);
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(text.contains("1 (closed, inside on the left)"), "{text}");
     // A mesh extension is refused for 2D input, before any work.
     let o = rfta(&["reconstruct", s(&input), "-o", s(&dir.join("x.ply"))]);
     assert_eq!(o.status.code(), Some(1));
