@@ -401,6 +401,9 @@ impl Segment {
 /// a cell whose corners alternate in sign the bilinear saddle value decides which corners the
 /// curve joins (the asymptotic decider), so the loops have the topology of the interpolant.
 /// Loops that reach the grid's border end there open.
+///
+/// # Panics
+/// If `values.len() != grid.len()` (a caller bug; validated inputs come from [`Samples2`]).
 pub fn contour(grid: &Grid2, values: &[f64], iso: f64) -> Polylines {
     let [nx, ny] = grid.dims();
     assert_eq!(values.len(), nx * ny, "one value per grid point");

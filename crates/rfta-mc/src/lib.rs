@@ -124,6 +124,9 @@ fn edge_vertex(grid: &Grid, values: &[f64], iso: f64, edge: u64) -> DVec3 {
 /// let curve = rfta_mc::marching_squares(&grid, &values, 0.0);
 /// assert_eq!(curve.loops(), 1);
 /// ```
+///
+/// # Panics
+/// If `values.len() != grid.len()`, as [`marching_cubes`].
 pub fn marching_squares(
     grid: &rfta_geom::plane::Grid2,
     values: &[f64],
