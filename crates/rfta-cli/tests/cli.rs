@@ -342,7 +342,10 @@ fn two_dimensional_input_gives_polylines() {
     // `info` knows both.
     let o = rfta(&["info", s(&input)]);
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(text.contains("2D SDF samples") && text.contains("21 x 21"), "{text}");
+    assert!(
+        text.contains("2D SDF samples") && text.contains("21 x 21"),
+        "{text}"
+    );
     let o = rfta(&["info", s(&dir.join("curve.obj"))]);
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(text.contains("1 (closed, inside on the left)"), "{text}");
