@@ -32,12 +32,22 @@ fn summary(curve: &Polylines) -> String {
     )
 }
 
+/// What `reconstruct` writes besides the curve.
+pub(crate) struct Extras<'a> {
+    /// `--report`: the key figures as JSON (the names `rfta batch` reads: `samples`,
+    /// `vertices`, `faces` = edges, `components` = loops, `watertight` = closed).
+    pub(crate) report: Option<&'a Path>,
+    /// `--points`: the tangency points and normals, as PLY with `z = 0`.
+    pub(crate) points: Option<&'a Path>,
+}
+
 /// `rfta reconstruct` on 2D samples: polylines to `output` (.obj, .svg, .csv).
 pub(crate) fn reconstruct(
     input: &Path,
     output: &Path,
     bounds: Option<rfta_io::GridBounds>,
     params: &Params,
+    extras: Extras<'_>,
     ui: &Ui,
 ) -> Result<()> {
     let samples = match read(input, bounds) {
@@ -93,6 +103,40 @@ pub(crate) fn reconstruct(
     ));
     rfta_io::write_polylines(output, &out.curve)?;
     ui.say(format!("wrote {}", output.display()));
+    if let Some(path) = extras.report {
+        let json = serde_json::json!({
+            "seconds": r.seconds,
+            "samples": r.samples,
+            "dimension": 2,
+            "vertices": out.curve.vertices.len(),
+            "faces": out.curve.edges.len(),
+            "components": out.curve.loops(),
+            "watertight": out.curve.is_closed(),
+            "circles_with_points": r.owners,
+            "points": r.points,
+            "rounds": r.rounds,
+            "depth": r.depth,
+            "islands_removed": r.islands_removed,
+        });
+        rfta_io::write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &json)?;
+            writeln!(w)
+        })?;
+    }
+    if let Some(path) = extras.points {
+        let (p, n): (Vec<_>, Vec<_>) = out
+            .points
+            .iter()
+            .map(|(p, n)| (p.extend(0.0), n.extend(0.0)))
+            .unzip();
+        let cloud = rfta::geom::OrientedPoints::new(p, n, None).context("the tangency points")?;
+        rfta_io::write_oriented_points_ply(path, &cloud)?;
+        ui.say(format!(
+            "wrote {} tangency points to {}",
+            cloud.len(),
+            path.display()
+        ));
+    }
     Ok(())
 }
 

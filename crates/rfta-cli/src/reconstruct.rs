@@ -300,7 +300,18 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         crate::ui::check_output_2d(&args.output)?;
         let mut params = args.tuning.params();
         params.clamp = args.checks.clamp;
-        return crate::plane::reconstruct(&args.input, &args.output, args.bounds, &params, ui);
+        let extras = crate::plane::Extras {
+            report: args.report.as_deref(),
+            points: args.points.as_deref(),
+        };
+        return crate::plane::reconstruct(
+            &args.input,
+            &args.output,
+            args.bounds,
+            &params,
+            extras,
+            ui,
+        );
     }
     crate::ui::check_output(&args.output)?;
     if let Some(p) = &args.points {

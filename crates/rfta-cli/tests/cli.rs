@@ -332,6 +332,30 @@ fn two_dimensional_input_gives_polylines() {
             );
         }
     }
+    // The report `rfta batch` reads, and the points.
+    let (report, points) = (dir.join("r.json"), dir.join("p.ply"));
+    let o = rfta(&[
+        "reconstruct",
+        s(&input),
+        "-o",
+        s(&dir.join("again.obj")),
+        "--report",
+        s(&report),
+        "--points",
+        s(&points),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&report).expect("report")).expect("json");
+    assert_eq!(json["components"], 1);
+    assert_eq!(json["watertight"], true);
+    assert_eq!(json["samples"], 441);
+    let cloud = rfta_io::read_oriented_points(&points).expect("points");
+    assert!(cloud.len() > 10);
+    for p in cloud.positions() {
+        assert_eq!(p.z, 0.0);
+        assert!((p.truncate().length() - 0.5).abs() < 0.01);
+    }
     for ext in ["svg", "csv"] {
         let out = dir.join(format!("curve.{ext}"));
         let o = rfta(&["reconstruct", s(&input), "-o", s(&out)]);
