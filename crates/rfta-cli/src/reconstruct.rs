@@ -300,6 +300,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         crate::ui::check_output_2d(&args.output)?;
         let mut params = args.tuning.params();
         params.clamp = args.checks.clamp;
+        params.check = !args.checks.no_check;
         let extras = crate::plane::Extras {
             report: args.report.as_deref(),
             points: args.points.as_deref(),

@@ -80,7 +80,10 @@ fn unreadable_and_malformed_files_are_errors_naming_file_and_problem() {
         ("inf.npy", "SDF value at sample 7 is not finite (-inf)"),
         ("int32.npy", "unsupported dtype '<i4'"),
         // A 3D grid saved as 2D is read as 2D, and its values are no 2D distance.
-        ("shape_2d.npy", "too few for a surface"),
+        (
+            "shape_2d.npy",
+            "1241 of 2197 samples overlap their nearest sample of the other sign",
+        ),
         ("nan_2d.npy", "SDF value at sample 10 is not finite (NaN)"),
         (
             "pixel_1.png",

@@ -87,6 +87,9 @@ pub fn reconstruct(samples: &Samples2, params: &Params) -> Result<Reconstruction
 
 fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     let start = Instant::now();
+    if params.check {
+        check_separation(samples, params.max_inconsistent)?;
+    }
     // Normalize as the reference does: the longer side of the samples' box becomes 1.
     let (lo, hi) = samples.bounds();
     let scale = (hi - lo).max_element().max(f64::MIN_POSITIVE);
@@ -236,6 +239,52 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         points,
         report,
     })
+}
+
+/// Refuses values that are not a signed distance, by the 3D check's rule
+/// ([`crate::check::SEVERE_RATIO`]): the curve crosses the segment between two samples of
+/// opposite signs, so their circles can at most touch (`|s_i| + |s_j| <= |p_i - p_j|`); more than
+/// `max_fraction` of the samples overlapping their nearest sample of the other sign by a quarter
+/// of the distance is an occupancy image or a field in other units than the positions, and
+/// reconstructing from it gives a wrong curve or none. (The 3D check also detects clamps and
+/// measures noise; in 2D this is the whole check.)
+fn check_separation(samples: &Samples2, max_fraction: f64) -> Result<()> {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    use rayon::prelude::*;
+    let (p, v) = (samples.positions(), samples.values());
+    let mut severe = 0;
+    for negative in [true, false] {
+        let other: Vec<usize> = (0..v.len())
+            .filter(|&j| (v[j] < 0.0) != negative && v[j] != 0.0)
+            .collect();
+        let coords: Vec<[f64; 2]> = other.iter().map(|&j| p[j].to_array()).collect();
+        let Ok(tree) = ImmutableKdTree::<f64, 2>::new_from_slice(&coords) else {
+            continue;
+        };
+        if other.is_empty() {
+            continue;
+        }
+        severe += (0..v.len())
+            .into_par_iter()
+            .filter(|&i| (v[i] < 0.0) == negative && v[i] != 0.0)
+            .filter(|&i| {
+                let nn = tree
+                    .query(&p[i].to_array())
+                    .nearest_one::<SquaredEuclidean<f64>>()
+                    .execute();
+                let j = other[nn.item as usize];
+                let d = p[i].distance(p[j]);
+                v[i].abs() + v[j].abs() > crate::check::SEVERE_RATIO * d
+            })
+            .count();
+    }
+    if severe as f64 > max_fraction * v.len() as f64 {
+        return Err(Error::NotADistance(format!(
+            "{severe} of {} samples overlap their nearest sample of the other sign by more than a quarter of the distance between them, which a signed distance never does (an occupancy image, or values in other units than the positions?); check the PNG's value range or the grid's bounds, or turn the check off (--no-check)",
+            v.len()
+        )));
+    }
+    Ok(())
 }
 
 /// Samples whose circles a small loop must touch, nearest, for the loop to stay without a sample

@@ -161,3 +161,25 @@ fn scattered_samples_give_the_circle_too() {
     let (mean, max) = vertex_error(&out.curve, circle);
     assert!(mean < 0.07 / 100.0 && max < 0.07 / 20.0, "{mean} {max}");
 }
+
+#[test]
+fn values_that_are_not_a_distance_are_refused_unless_the_check_is_off() {
+    // An occupancy image of the disc (+-1) and the disc's SDF in other units (x 3).
+    let occupancy = grid_samples(24, |p| if circle(p) < 0.0 { -1.0 } else { 1.0 });
+    let scaled = grid_samples(24, |p| 3.0 * circle(p));
+    for samples in [&occupancy, &scaled] {
+        match plane::reconstruct(samples, &Params::default()) {
+            Err(rfta::Error::NotADistance(why)) => assert!(why.contains("--no-check"), "{why}"),
+            other => panic!("expected NotADistance, got {other:?}"),
+        }
+    }
+    let unchecked = Params {
+        check: false,
+        ..Params::default()
+    };
+    // Without the check the pipeline tries (and, its circles covering the box, finds no points).
+    assert!(!matches!(
+        plane::reconstruct(&scaled, &unchecked),
+        Err(rfta::Error::NotADistance(_))
+    ));
+}
