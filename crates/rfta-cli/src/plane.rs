@@ -196,11 +196,7 @@ pub(crate) fn demo(output: &Path, res: usize, params: &Params, ui: &Ui) -> Resul
     let seconds = t.elapsed().as_secs_f64();
     let ms = rfta_mc::marching_squares(&grid, &values, 0.0);
     let err = |c: &Polylines| {
-        let d: Vec<f64> = c.vertices.iter().map(|&v| demo_shape(v).abs()).collect();
-        (
-            d.iter().sum::<f64>() / d.len().max(1) as f64,
-            d.iter().copied().fold(0.0, f64::max),
-        )
+        crate::reconstruct::mean_and_max(c.vertices.iter().map(|&v| demo_shape(v).abs()))
     };
     let (rm, rx) = err(&out.curve);
     let (mm, mx) = err(&ms);

@@ -422,6 +422,14 @@ fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
     Ok(())
 }
 
+/// Mean and largest of the demos' vertex errors (0 for none).
+pub(crate) fn mean_and_max(errors: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (sum, max, n) = errors.fold((0.0, 0.0f64, 0usize), |(s, m, n), d| {
+        (s + d, m.max(d), n + 1)
+    });
+    (sum / n.max(1) as f64, max)
+}
+
 /// Two tori side by side, overlapping: genus 2. The minimum of their exact signed distances is
 /// exact outside and a lower bound on the distance inside, so its spheres never cross the surface.
 fn two_tori(p: DVec3) -> f64 {
@@ -480,13 +488,7 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
     let out = run_pipeline(&samples, &params, ui)?;
     describe(&out, ui, t.elapsed().as_secs_f64());
     let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
-    let err = |m: &TriMesh| {
-        let d: Vec<f64> = m.vertices.iter().map(|&v| two_tori(v).abs()).collect();
-        (
-            d.iter().sum::<f64>() / d.len().max(1) as f64,
-            d.iter().copied().fold(0.0, f64::max),
-        )
-    };
+    let err = |m: &TriMesh| mean_and_max(m.vertices.iter().map(|&v| two_tori(v).abs()));
     let (rm, rx) = err(&out.mesh);
     let (mm, mx) = err(&mc);
     let genus = rfta_mesh::Topology::of(&out.mesh).genus();

@@ -58,23 +58,33 @@ pub fn is_sdf_2d(path: &Path) -> Result<bool> {
             Ok(header.shape.len() == 2 && header.shape[1] != 4)
         }
         Some("csv" | "txt" | "xyz") => {
-            let bytes = read_bytes(path)?;
-            let text = as_text(&bytes).map_err(|e| e.at(path))?;
-            Ok(text
-                .lines()
-                .map(str::trim)
-                .find(|l| {
-                    !l.is_empty()
-                        && !l.starts_with('#')
-                        && l.split([',', ';', ' ', '\t'])
-                            .any(|t| t.parse::<f64>().is_ok())
-                })
-                .is_some_and(|l| {
-                    l.split([',', ';', ' ', '\t'])
-                        .filter(|t| !t.is_empty())
-                        .count()
-                        == 3
-                }))
+            // Only up to the first data row (the reader reads the file once more); a file that
+            // is not text is left to the 3D reader, which says so.
+            use std::io::BufRead;
+            let file = std::fs::File::open(path).map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+            let tokens = |l: &str| -> Vec<String> {
+                l.split([',', ';', ' ', '\t'])
+                    .filter(|t| !t.is_empty())
+                    .map(str::to_string)
+                    .collect()
+            };
+            for line in std::io::BufReader::new(file).lines() {
+                let Ok(line) = line else {
+                    return Ok(false);
+                };
+                let line = line.trim();
+                if line.is_empty() || line.starts_with('#') {
+                    continue;
+                }
+                let t = tokens(line);
+                if t.iter().any(|t| t.parse::<f64>().is_ok()) {
+                    return Ok(t.len() == 3);
+                }
+            }
+            Ok(false)
         }
         _ => Ok(false),
     }

@@ -310,27 +310,23 @@ fn drop_islands(
     if min_island <= 0.0 || curve.is_empty() {
         return (curve, 0);
     }
-    // Loops: edges grouped by connected vertices.
-    let n = curve.vertices.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut v: usize) -> usize {
-        while parent[v] != v {
-            parent[v] = parent[parent[v]];
-            v = parent[v];
-        }
-        v
-    }
+    // Loops: edges grouped by connected vertices; `label[e]` is edge e's loop.
+    let mut sets = rfta_mesh::UnionFind::new(curve.vertices.len());
     for &[a, b] in &curve.edges {
-        let (ra, rb) = (root(&mut parent, a as usize), root(&mut parent, b as usize));
-        parent[ra.max(rb)] = ra.min(rb);
+        sets.union(a as usize, b as usize);
     }
     let mut loops: std::collections::BTreeMap<usize, Vec<[u32; 2]>> = Default::default();
     for &e in &curve.edges {
-        loops
-            .entry(root(&mut parent, e[0] as usize))
-            .or_default()
-            .push(e);
+        loops.entry(sets.find(e[0] as usize)).or_default().push(e);
     }
+    let label: Vec<usize> = curve
+        .edges
+        .iter()
+        .map(|e| {
+            let root = sets.find(e[0] as usize);
+            loops.keys().position(|&r| r == root).unwrap_or(usize::MAX)
+        })
+        .collect();
     let whole = PolylineIndex::new(&curve);
     let mut keep = vec![true; loops.len()];
     for (k, edges) in loops.values().enumerate() {
@@ -359,6 +355,15 @@ fn drop_islands(
             .sum();
         let inside_negative = area > 0.0;
         let index = PolylineIndex::new(&one);
+        // The rest of the curve, indexed once per small loop (only if a sample needs it).
+        let others = Polylines {
+            vertices: curve.vertices.clone(),
+            edges: (0..curve.edges.len())
+                .filter(|&e| label[e] != k)
+                .map(|e| curve.edges[e])
+                .collect(),
+        };
+        let mut rest_index: Option<PolylineIndex<'_>> = None;
         let mut witnesses = 0;
         let mut supported = false;
         for (c, &v) in circles.iter().zip(values) {
@@ -371,19 +376,14 @@ fn drop_islands(
                 continue;
             }
             // The rest of the curve: the whole curve's nearest edge, unless it is this loop's.
-            let rest = if edges.contains(&curve.edges[whole.closest(c.center).edge]) {
-                let others = Polylines {
-                    vertices: curve.vertices.clone(),
-                    edges: curve
-                        .edges
-                        .iter()
-                        .filter(|e| !edges.contains(e))
-                        .copied()
-                        .collect(),
-                };
-                PolylineIndex::new(&others).closest(c.center).distance
+            let nearest = whole.closest(c.center);
+            let rest = if label[nearest.edge] == k {
+                rest_index
+                    .get_or_insert_with(|| PolylineIndex::new(&others))
+                    .closest(c.center)
+                    .distance
             } else {
-                whole.closest(c.center).distance
+                nearest.distance
             };
             if rest > c.radius + GAP_MARGIN * spacing {
                 witnesses += 1;
