@@ -254,8 +254,8 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     }
     if r.vertices_pushed_out > 0 {
         ui.detail(format!(
-            "moved {} vertices out of the sample spheres they entered",
-            r.vertices_pushed_out
+            "moved {} vertices out of the sample spheres they entered ({} of them added where a face cut a sphere with no vertex inside)",
+            r.vertices_pushed_out, r.vertices_added
         ));
     }
     if r.dents > 0 {

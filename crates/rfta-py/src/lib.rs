@@ -381,6 +381,7 @@ fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<B
     d.set_item("islands_removed", r.islands_removed)?;
     d.set_item("unsupported_removed", r.unsupported_removed)?;
     d.set_item("vertices_pushed_out", r.vertices_pushed_out)?;
+    d.set_item("vertices_added", r.vertices_added)?;
     d.set_item("dents", r.dents)?;
     d.set_item("side_errors", r.side_errors.clone())?;
     d.set_item("stopped_early", r.stopped_early.clone())?;

@@ -78,8 +78,20 @@ pub(crate) fn finish(
         .filter(|&i| unit.spheres[i as usize].radius < r_own)
         .collect();
     let near = SphereTree::with_indices(&unit.spheres, &near);
-    report.vertices_pushed_out =
-        push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
+    let before = mesh.vertices.clone();
+    push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
+    report.vertices_added = clear_spheres(
+        &mut mesh,
+        unit,
+        CLEAR_BELOW * r_own,
+        PUSH_DEPTH * unit.spacing(),
+    );
+    report.vertices_pushed_out = before
+        .iter()
+        .zip(&mesh.vertices)
+        .filter(|(a, b)| a != b)
+        .count()
+        + report.vertices_added;
     report.dents = dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
     let t = Instant::now();
@@ -214,9 +226,9 @@ const PUSH_PASSES: usize = 8;
 /// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners,
 /// thin parts). Each vertex inside some sphere by more than `depth` (unit box) moves radially onto
 /// the boundary of the sphere it is deepest in, up to [`PUSH_PASSES`] times; the connectivity
-/// stays, and a move that would turn a face over is undone. Each vertex moves on its own, so the
-/// result does not depend on the thread count. Returns how many vertices moved.
-fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, depth: f64) -> usize {
+/// stays, and the moves are taken without folding the surface ([`apply_moves`]). The targets do
+/// not depend on one another, so the result does not depend on the thread count.
+fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, depth: f64) {
     use rayon::prelude::*;
     let moved_to: Vec<Option<DVec3>> = mesh
         .vertices
@@ -240,39 +252,399 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
             moved.then(|| unit.to_input(p))
         })
         .collect();
-    // Moving a vertex must not fold the surface: where a face turns over (its normal against the
-    // one it had), its moved vertices go back, until no face is turned.
-    let original = mesh.vertices.clone();
+    apply_moves(mesh, &moved_to);
+}
+
+/// How many times [`apply_moves`] goes over the vertices.
+const MOVE_SWEEPS: usize = 8;
+
+/// Moves each vertex towards its `moved_to` position where it has one without folding the
+/// surface: in index order, each takes the largest of its whole remaining move, half, a quarter
+/// or an eighth of it that turns none of its faces over (a face's normal against the one it had),
+/// given where its neighbours are by then; [`MOVE_SWEEPS`] sweeps, so that a vertex held back by
+/// a neighbour (at sharp features the faces can be a fiftieth of a spacing across) follows it.
+/// Returns the vertices that moved.
+fn apply_moves(mesh: &mut TriMesh, moved_to: &[Option<DVec3>]) -> Vec<u32> {
     let normals: Vec<DVec3> = (0..mesh.faces.len())
         .map(|f| mesh.face_normal_scaled(f))
         .collect();
-    let mut moved: Vec<bool> = moved_to.iter().map(Option::is_some).collect();
-    for (v, m) in mesh.vertices.iter_mut().zip(&moved_to) {
-        if let Some(p) = m {
-            *v = *p;
+    let mut around: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
+    for (f, face) in mesh.faces.iter().enumerate() {
+        for &v in face {
+            if moved_to[v as usize].is_some() {
+                around[v as usize].push(f as u32);
+            }
         }
     }
-    loop {
-        let turned: Vec<usize> = (0..mesh.faces.len())
-            .filter(|&f| {
-                mesh.faces[f].iter().any(|&v| moved[v as usize])
-                    && normals[f].dot(mesh.face_normal_scaled(f)) <= 0.0
-            })
-            .collect();
-        if turned.is_empty() {
+    let turned = |mesh: &TriMesh, v: usize| {
+        around[v]
+            .iter()
+            .any(|&f| normals[f as usize].dot(mesh.face_normal_scaled(f as usize)) <= 0.0)
+    };
+    let original = mesh.vertices.clone();
+    let mut arrived = vec![false; mesh.vertices.len()];
+    for _ in 0..MOVE_SWEEPS {
+        for v in 0..mesh.vertices.len() {
+            let Some(target) = moved_to[v] else { continue };
+            if arrived[v] {
+                continue;
+            }
+            let from = mesh.vertices[v];
+            for fraction in [1.0, 0.5, 0.25, 0.125] {
+                mesh.vertices[v] = from + (target - from) * fraction;
+                if !turned(mesh, v) {
+                    arrived[v] = fraction == 1.0;
+                    break;
+                }
+                mesh.vertices[v] = from;
+            }
+        }
+    }
+    (0..mesh.vertices.len() as u32)
+        .filter(|&v| mesh.vertices[v as usize] != original[v as usize])
+        .collect()
+}
+
+/// Rounds of [`clear_spheres`]: each finds the spheres the mesh still enters and moves the
+/// vertices inside them out.
+const CLEAR_ROUNDS: usize = 6;
+
+/// [`clear_spheres`] looks at spheres smaller than this many owner radii ([`Params::owner_band`]
+/// spacings on grids). A wider sphere tangent at the same point along the same normal enters a
+/// bulge at most by a few hundredths of a spacing more (a bulge `w` wide enters a sphere of
+/// radius `t` by about its height less `w^2 / 2t`): below the margin at which
+/// [`crate::consistency`] counts an entry, where the many far spheres' queries would cost most
+/// (nine in ten of the 129^3 bunny's samples).
+const CLEAR_BELOW: f64 = 3.0;
+
+/// The farthest a vertex moves in [`clear_spheres`], in sample spacings: an entry deeper than
+/// this is not a smooth surface's overshoot but a wrong part, which moving vertices would tear.
+const CLEAR_REACH: f64 = 0.5;
+
+/// The faces around each vertex of a mesh.
+struct Incidence {
+    /// Where each vertex's faces start in `faces` (one more entry than vertices).
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl Incidence {
+    fn of(mesh: &TriMesh) -> Self {
+        let mut start = vec![0u32; mesh.vertices.len() + 1];
+        for face in &mesh.faces {
+            for &v in face {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..mesh.vertices.len() {
+            start[v + 1] += start[v];
+        }
+        let mut at = start.clone();
+        let mut faces = vec![0u32; start[mesh.vertices.len()] as usize];
+        for (f, face) in mesh.faces.iter().enumerate() {
+            for &v in face {
+                faces[at[v as usize] as usize] = f as u32;
+                at[v as usize] += 1;
+            }
+        }
+        Self { start, faces }
+    }
+
+    fn faces(&self, v: u32) -> &[u32] {
+        &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// The mesh in the unit box.
+fn in_unit_box(mesh: &TriMesh, unit: &UnitBox) -> TriMesh {
+    TriMesh {
+        vertices: mesh.vertices.iter().map(|&v| unit.to_unit(v)).collect(),
+        faces: mesh.faces.clone(),
+    }
+}
+
+/// The surface may not enter a sample sphere (Sellán et al. 2024, §3), of any size: the far
+/// spheres own no tangency point, so nothing but this keeps the smooth Poisson surface out of
+/// them (a bulge at a corner, where many far spheres touch the same point), and the near ones are
+/// cut wherever the shape is sharper than the surface (edges, corners, thin parts).
+///
+/// Each round finds every sphere (of `all`) the mesh enters by more than `depth` (unit box): the
+/// first round every sphere, the later ones those entered before and those holding a vertex that
+/// moved. Where no vertex of the cutting face lies in the sphere, a vertex is put at the face's
+/// point nearest the centre ([`split_where_entered`]). Then each vertex inside entered spheres
+/// moves along its normal (inward out of positive spheres, outward out of negative ones) or
+/// radially away from the deepest sphere's centre, whichever leaves all of them sooner
+/// ([`leave_along`]), as long as that is within [`CLEAR_REACH`] and meets no sphere of the other
+/// sign; the moves are taken without folding the surface ([`apply_moves`]). At most
+/// [`CLEAR_ROUNDS`] rounds. Vertices move in index order, so the result does not depend on the
+/// thread count. Returns how many vertices were added.
+fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> usize {
+    use rayon::prelude::*;
+    let reach = CLEAR_REACH * unit.spacing();
+    let mut added = 0;
+    // The spheres entered in the last round, each with the face that came nearest its centre.
+    let mut last: Vec<(u32, rfta_mesh::ClosestPoint)> = Vec::new();
+    for round in 0..CLEAR_ROUNDS {
+        let part = in_unit_box(mesh, unit);
+        let incident = Incidence::of(&part);
+        let entry = |i: u32| {
+            let s = unit.spheres[i as usize];
+            let lo = s.radius - depth;
+            (lo > 0.0).then_some((s.center, lo))
+        };
+        // The first round asks every sphere, the later ones only those entered before, around
+        // where they were entered: a vertex moves by at most CLEAR_REACH.
+        let found: Vec<(u32, rfta_mesh::ClosestPoint)> = if round == 0 {
+            let Ok(index) = rfta_mesh::MeshIndex::new(&part) else {
+                break;
+            };
+            (0..unit.len() as u32)
+                .into_par_iter()
+                .filter(|&i| unit.spheres[i as usize].radius < below)
+                .filter_map(|i| {
+                    let (c, lo) = entry(i)?;
+                    Some((i, index.closest_point_within(c, lo * lo)?))
+                })
+                .collect()
+        } else {
+            last.par_iter()
+                .filter_map(|&(i, ref seed)| {
+                    let (c, lo) = entry(i)?;
+                    Some((i, nearest_around(&part, &incident, seed.face, c, lo)?))
+                })
+                .collect()
+        };
+        if found.is_empty() {
             break;
         }
-        for f in turned {
-            for v in mesh.faces[f] {
-                let v = v as usize;
-                if moved[v] {
-                    moved[v] = false;
-                    mesh.vertices[v] = original[v];
+        let splits = split_where_entered(mesh, &part, &incident, unit, &found, depth);
+        added += splits;
+        let part = in_unit_box(mesh, unit);
+        let entered: Vec<u32> = found.iter().map(|&(i, _)| i).collect();
+        let tree = SphereTree::with_indices(&unit.spheres, &entered);
+        let incident = Incidence::of(&part);
+        // The vertices inside entered spheres: each sphere's cap, grown from the face nearest
+        // its centre (the face's slot holds a piece of it after a split).
+        let mut inside: Vec<u32> = found
+            .par_iter()
+            .flat_map_iter(|&(i, ref c)| {
+                let s = unit.spheres[i as usize];
+                let holds =
+                    |v: u32| (part.vertices[v as usize] - s.center).length() < s.radius - depth;
+                let mut cap: Vec<u32> = part.faces[c.face as usize]
+                    .into_iter()
+                    .filter(|&v| holds(v))
+                    .collect();
+                let mut next = 0;
+                while next < cap.len() {
+                    let v = cap[next];
+                    next += 1;
+                    for &f in incident.faces(v) {
+                        for w in part.faces[f as usize] {
+                            if !cap.contains(&w) && holds(w) {
+                                cap.push(w);
+                            }
+                        }
+                    }
+                }
+                cap
+            })
+            .collect();
+        inside.sort_unstable();
+        inside.dedup();
+        let mut moved_to: Vec<Option<DVec3>> = vec![None; part.vertices.len()];
+        let targets: Vec<Option<DVec3>> = inside
+            .par_iter()
+            .map_init(Vec::new, |hits, &v| {
+                let p = part.vertices[v as usize];
+                tree.spheres_containing_into(p, usize::MAX, -depth, None, hits);
+                let &(_, deepest) = hits.first()?;
+                let positive = unit.values[deepest as usize] > 0.0;
+                let n: DVec3 = incident
+                    .faces(v)
+                    .iter()
+                    .map(|&f| part.face_normal_scaled(f as usize))
+                    .sum();
+                let along = n.normalize_or_zero() * if positive { -1.0 } else { 1.0 };
+                let radial = (p - unit.spheres[deepest as usize].center).normalize_or_zero();
+                let start = std::mem::take(hits);
+                [along, radial]
+                    .into_iter()
+                    .filter(|d| *d != DVec3::ZERO)
+                    .filter_map(|dir| {
+                        hits.clone_from(&start);
+                        leave_along(unit, &tree, p, dir, positive, depth, reach, hits)
+                            .map(|t| (t, dir))
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .map(|(t, dir)| unit.to_input(p + dir * t))
+            })
+            .collect();
+        for (&v, t) in inside.iter().zip(targets) {
+            moved_to[v as usize] = t;
+        }
+        let moved = apply_moves(mesh, &moved_to);
+        if moved.is_empty() && splits == 0 {
+            break;
+        }
+        last = found;
+    }
+    added
+}
+
+/// The nearest point to `center` of the faces of `part` within `lo` of it that connect to the
+/// face `seed` or its neighbours through such faces, if there are any: where a sphere was entered
+/// before a round of [`clear_spheres`], the part still inside it after the round surrounds the
+/// face that was nearest its centre.
+fn nearest_around(
+    part: &TriMesh,
+    incident: &Incidence,
+    seed: u32,
+    center: DVec3,
+    lo: f64,
+) -> Option<rfta_mesh::ClosestPoint> {
+    let mut queue = vec![seed];
+    let mut seen = std::collections::HashSet::from([seed]);
+    let mut next = 0;
+    let mut best: Option<rfta_mesh::ClosestPoint> = None;
+    while next < queue.len() {
+        let f = queue[next];
+        next += 1;
+        let [a, b, c] = part.triangle(f as usize);
+        let (point, barycentric) = rfta_geom::kernels::closest_point_on_triangle(center, a, b, c);
+        let d2 = (point - center).length_squared();
+        if d2 < lo * lo && best.as_ref().is_none_or(|b| d2 < b.distance_squared) {
+            best = Some(rfta_mesh::ClosestPoint {
+                point,
+                distance_squared: d2,
+                face: f,
+                barycentric,
+            });
+        }
+        if d2 < lo * lo || f == seed {
+            for v in part.faces[f as usize] {
+                for &g in incident.faces(v) {
+                    if seen.insert(g) {
+                        queue.push(g);
+                    }
                 }
             }
         }
     }
-    moved.iter().filter(|&&m| m).count()
+    best
+}
+
+/// Where no vertex of the nearest face lies inside an entered sphere (`found`: the sphere and the
+/// mesh's nearest point to its centre, on `part`, the mesh in the unit box, whose faces around
+/// each vertex `incident` holds), a vertex is put at that nearest point: the face is split in
+/// three, or, on an edge, both faces beside it in two (the new faces lie in the old ones' planes,
+/// so none turns over). A face is split once per call, and not where the point lies within a
+/// fiftieth of its barycentric range of a vertex. Returns how many vertices were added.
+fn split_where_entered(
+    mesh: &mut TriMesh,
+    part: &TriMesh,
+    incident: &Incidence,
+    unit: &UnitBox,
+    found: &[(u32, rfta_mesh::ClosestPoint)],
+    depth: f64,
+) -> usize {
+    let mut touched = vec![false; mesh.faces.len()];
+    let mut added = 0;
+    for &(i, ref c) in found {
+        let f = c.face as usize;
+        let s = unit.spheres[i as usize];
+        let holds = |v: u32| (part.vertices[v as usize] - s.center).length() < s.radius - depth;
+        if touched[f] || mesh.faces[f].iter().any(|&v| holds(v)) {
+            continue;
+        }
+        let face = mesh.faces[f];
+        let k = mesh.vertices.len() as u32;
+        let on_edge: Vec<usize> = (0..3).filter(|&j| c.barycentric[j] < 0.02).collect();
+        let pieces: Vec<(Option<usize>, [u32; 3])> = match on_edge.as_slice() {
+            [] => vec![
+                (Some(f), [face[0], face[1], k]),
+                (None, [face[1], face[2], k]),
+                (None, [face[2], face[0], k]),
+            ],
+            &[j] => {
+                // The edge opposite vertex j, u -> v in this face, v -> u in its neighbour.
+                let (w, u, v) = (face[j], face[(j + 1) % 3], face[(j + 2) % 3]);
+                let beside = incident
+                    .faces(u)
+                    .iter()
+                    .map(|&g| g as usize)
+                    .find(|&g| g != f && part.faces[g].contains(&v));
+                let Some(g) = beside.filter(|&g| !touched[g]) else {
+                    continue;
+                };
+                let x = part.faces[g]
+                    .into_iter()
+                    .find(|&x| x != u && x != v)
+                    .unwrap_or(u);
+                vec![
+                    (Some(f), [u, k, w]),
+                    (None, [k, v, w]),
+                    (Some(g), [v, k, x]),
+                    (None, [k, u, x]),
+                ]
+            }
+            _ => continue,
+        };
+        mesh.vertices.push(
+            face.iter()
+                .zip(c.barycentric)
+                .map(|(&v, b)| mesh.vertices[v as usize] * b)
+                .sum(),
+        );
+        for (slot, piece) in pieces {
+            match slot {
+                Some(g) => {
+                    touched[g] = true;
+                    mesh.faces[g] = piece;
+                }
+                None => mesh.faces.push(piece),
+            }
+        }
+        added += 1;
+    }
+    added
+}
+
+/// How far along `dir` from `p` the line leaves every sphere of `tree` that holds it by more
+/// than `depth` (`hits` holds those at `p`), if it does within `reach` and meets only spheres of
+/// the sign `positive`.
+#[allow(clippy::too_many_arguments)]
+fn leave_along(
+    unit: &UnitBox,
+    tree: &SphereTree,
+    p: DVec3,
+    dir: DVec3,
+    positive: bool,
+    depth: f64,
+    reach: f64,
+    hits: &mut Vec<(f64, u32)>,
+) -> Option<f64> {
+    let mut t = 0.0f64;
+    for _ in 0..8 {
+        for &(_, j) in hits.iter() {
+            if (unit.values[j as usize] > 0.0) != positive {
+                return None;
+            }
+            let s = unit.spheres[j as usize];
+            let o = p - s.center;
+            let b = o.dot(dir);
+            let disc = b * b - (o.length_squared() - s.radius * s.radius);
+            t = t.max(-b + disc.max(0.0).sqrt());
+        }
+        if t > reach {
+            return None;
+        }
+        tree.spheres_containing_into(p + dir * t, usize::MAX, -depth, None, hits);
+        if hits.is_empty() {
+            return Some(t);
+        }
+    }
+    None
 }
 
 /// Why a component of the mesh goes.
@@ -618,8 +990,14 @@ mod tests {
         };
         let mut sunk = shapes::icosphere(0.45, 3);
         assert!(deepest(&sunk) > 0.02, "the test surface must enter spheres");
-        let moved = push_out_of_spheres(&mut sunk, &unit, &tree, depth);
-        assert_eq!(moved, sunk.vertices.len());
+        let before = sunk.clone();
+        push_out_of_spheres(&mut sunk, &unit, &tree, depth);
+        let moved = before
+            .vertices
+            .iter()
+            .zip(&sunk.vertices)
+            .filter(|(a, b)| a != b);
+        assert_eq!(moved.count(), sunk.vertices.len());
         assert!(deepest(&sunk) <= depth + 1e-12, "{}", deepest(&sunk));
         // Out of the spheres is back near the true surface (within the grid's resolution).
         for v in &sunk.vertices {
@@ -627,8 +1005,65 @@ mod tests {
         }
         let mut exact = shapes::icosphere(0.5, 3);
         let before = exact.clone();
-        assert_eq!(push_out_of_spheres(&mut exact, &unit, &tree, depth), 0);
+        push_out_of_spheres(&mut exact, &unit, &tree, depth);
         assert_eq!(exact, before);
+    }
+
+    /// The deepest entry of any face of `mesh` (samples' coordinates) into the spheres of `unit`,
+    /// in sample spacings, by brute force.
+    fn deepest_entry(unit: &UnitBox, mesh: &TriMesh) -> f64 {
+        let part = in_unit_box(mesh, unit);
+        unit.spheres
+            .iter()
+            .map(|s| {
+                let d = (0..part.faces.len())
+                    .map(|f| {
+                        let [a, b, c] = part.triangle(f);
+                        let (q, _) =
+                            rfta_geom::kernels::closest_point_on_triangle(s.center, a, b, c);
+                        (q - s.center).length()
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                (s.radius - d) / unit.spacing()
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// A coarse surface around the ball of radius 0.5 (grid spacing 0.1), a quarter spacing too
+    /// large, enters the outside samples' spheres, the far ones too, and its faces (1.6 spacings
+    /// across) cut small spheres with no vertex inside. Cleared, no face enters any sphere by more
+    /// than the margin at which the consistency check counts an entry (brute force over every
+    /// sphere and face), vertices were added where faces cut, and the mesh is still closed and
+    /// oriented with the same Euler characteristic.
+    #[test]
+    fn cleared_spheres_are_left_by_faces_too() {
+        let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
+        let values = (0..grid.len())
+            .map(|i| grid.position(i).length() - 0.5)
+            .collect();
+        let samples = SdfSamples::grid(grid, values).expect("samples");
+        let unit = UnitBox::new(&samples, None, None);
+        let mut mesh = shapes::icosphere(0.525, 2);
+        assert!(
+            deepest_entry(&unit, &mesh) > 0.2,
+            "{}",
+            deepest_entry(&unit, &mesh)
+        );
+        let depth = PUSH_DEPTH * unit.spacing();
+        let added = clear_spheres(&mut mesh, &unit, f64::INFINITY, depth);
+        assert!(added > 0);
+        let entry = deepest_entry(&unit, &mesh);
+        assert!(entry < consistency::ENTER_MARGIN, "{entry}");
+        let topology = rfta_mesh::Topology::of(&mesh);
+        assert!(topology.is_watertight() && topology.is_manifold());
+        assert!(topology.is_consistently_oriented());
+        let euler = mesh.vertices.len() as i64 - (3 * mesh.faces.len() / 2) as i64
+            + mesh.faces.len() as i64;
+        assert_eq!(euler, 2);
+        // Out of the spheres is on the true surface (within the grid's resolution).
+        for v in &mesh.vertices {
+            assert!((v.length() - 0.5).abs() < 0.04, "{}", v.length());
+        }
     }
 
     #[test]

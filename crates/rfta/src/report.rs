@@ -96,8 +96,12 @@ pub struct Report {
     /// and after each re-solve that screened them toward their side
     /// ([`rfta_spsr::reconstruct_with_sides`]); the last entry is the returned surface's.
     pub side_errors: Vec<usize>,
-    /// Mesh vertices that were inside a sample sphere and moved onto its boundary.
+    /// Mesh vertices that were inside a sample sphere and moved out of it (`finish::push_out_of_spheres`
+    /// and `finish::clear_spheres`), counting those added to be moved.
     pub vertices_pushed_out: usize,
+    /// Of those, vertices added where a face or an edge cut a sample sphere with none of its
+    /// vertices inside it.
+    pub vertices_added: usize,
     /// Faces split so that a sample near the surface whose small sphere they cut lies on its own
     /// side (a dent; see `finish::dent_wrong_side`).
     pub dents: usize,
