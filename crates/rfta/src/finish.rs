@@ -69,15 +69,17 @@ pub(crate) fn finish(
         .timings
         .push(("components judged".into(), t.elapsed()));
     let t = Instant::now();
-    // The spheres that own points: near the surface and small, so the tree prunes well. The far
-    // ones are large and tangent to the same surface, which no bound can rule out cheaply; a
-    // smooth surface that enters one of them usually enters the near spheres between it and the
-    // surface as well.
+    // First radially out of the spheres that own points (near the surface and small, so the
+    // tree prunes well), then out of every sphere up to CLEAR_BELOW owner radii, along the normal
+    // where that is shorter, with faces split where they cut a sphere no vertex is in.
     let r_own = unit.owner_radius(params);
     let near: Vec<u32> = (0..n as u32)
         .filter(|&i| unit.spheres[i as usize].radius < r_own)
         .collect();
     let near = SphereTree::with_indices(&unit.spheres, &near);
+    // Dents before clearing the spheres (which can then clear what a dent's faces enter) and
+    // after it (for the samples a move out of a sphere left on the wrong side).
+    report.dents = dent_wrong_side(&mut mesh, samples);
     let before = mesh.vertices.clone();
     push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
     report.vertices_added = clear_spheres(
@@ -92,7 +94,7 @@ pub(crate) fn finish(
         .filter(|(a, b)| a != b)
         .count()
         + report.vertices_added;
-    report.dents = dent_wrong_side(&mut mesh, samples);
+    report.dents += dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(&mesh);
@@ -150,16 +152,15 @@ const DENT_BELOW: f64 = 0.5;
 /// How far beyond its sphere a dent's new vertex lands, in sample spacings.
 const DENT_MARGIN: f64 = 0.05;
 
-/// A small sphere (the sample less than [`DENT_BELOW`] spacings from the surface) that a face
-/// cuts with the sample on the wrong side of the mesh: no vertex need lie inside it (the faces
-/// are about a quarter of a spacing across), so [`push_out_of_spheres`] cannot clear it, and
-/// moving the surface away from the sample would leave it on the wrong side. The face is split
-/// at its point nearest the sample, and the new vertex moves through the sphere to just beyond
-/// its far side (along the face normal, [`DENT_MARGIN`] past it): the sample then lies in a
-/// shallow dent, on its own side. A split whose new faces would turn over, or of a face nearer
-/// an edge than a fiftieth of its barycentric range, is not made; a face split once is left to
-/// the next sample. Samples are taken in order, so the result does not depend on the thread
-/// count. Returns how many dents were made.
+/// A sample less than [`DENT_BELOW`] spacings from the surface, with the mesh as near, on the
+/// wrong side of the mesh: a face cuts its small sphere, or passes just beyond it (the faces are
+/// about a quarter of a spacing across, so no vertex need lie inside, and moving the surface
+/// away from the sample would leave it on the wrong side). The mesh's point nearest the sample
+/// moves through the sphere to just beyond its far side, on the line from that point through the
+/// sample ([`DENT_MARGIN`] past the sphere): a new vertex there ([`Splitter::split`]: the face,
+/// or both faces beside the edge, split), or the vertex itself. The sample then lies in a shallow
+/// dent, on its own side. Not made where a face would turn over. Samples are taken in order, so
+/// the result does not depend on the thread count. Returns how many dents were made.
 fn dent_wrong_side(mesh: &mut TriMesh, samples: &SdfSamples) -> usize {
     use rayon::prelude::*;
     let h = consistency::spacing(samples);
@@ -167,48 +168,39 @@ fn dent_wrong_side(mesh: &mut TriMesh, samples: &SdfSamples) -> usize {
         return 0;
     };
     let values = samples.values();
-    let wrong: Vec<(usize, u32)> = (0..values.len())
+    let reach = DENT_BELOW * h;
+    let wrong: Vec<(usize, rfta_mesh::ClosestPoint)> = (0..values.len())
         .into_par_iter()
         .filter_map(|i| {
             let (p, s) = (samples.position(i), values[i]);
             let r = s.abs();
-            if r <= consistency::SIGN_MARGIN * h || r >= DENT_BELOW * h {
+            if r <= consistency::SIGN_MARGIN * h || r >= reach {
                 return None;
             }
-            let c = index.closest_point_within(p, r * r)?;
+            let c = index.closest_point_within(p, reach * reach)?;
             let inside = index.winding_number(p) > 0.5;
-            (inside != (s < 0.0) && c.barycentric.iter().all(|&b| b > 0.02)).then_some((i, c.face))
+            (inside != (s < 0.0)).then_some((i, c))
         })
         .collect();
-    let mut touched = vec![false; mesh.faces.len()];
+    let mut splitter = Splitter::new(mesh);
     let mut dents = 0;
-    for (i, f) in wrong {
-        let f = f as usize;
-        if touched[f] {
-            continue;
-        }
-        touched[f] = true;
-        let (p, s) = (samples.position(i), values[i]);
-        let n = mesh.face_normal_scaled(f).normalize_or_zero();
+    for (i, c) in wrong {
+        let n = mesh.face_normal_scaled(c.face as usize).normalize_or_zero();
         if n == DVec3::ZERO {
             continue;
         }
-        // Outside (s > 0): the surface passes behind the sample, against the outward normal.
-        let apex = p - s.signum() * (s.abs() + DENT_MARGIN * h) * n;
-        let [a, b, c] = mesh.faces[f];
-        let k = mesh.vertices.len() as u32;
-        let split = [[a, b, k], [b, c, k], [c, a, k]];
-        let turned = split.iter().any(|&[u, v, _]| {
-            let [u, v] = [u, v].map(|x| mesh.vertices[x as usize]);
-            (v - u).cross(apex - u).dot(n) <= 0.0
-        });
-        if turned {
-            continue;
-        }
-        mesh.vertices.push(apex);
-        mesh.faces[f] = split[0];
-        mesh.faces.extend_from_slice(&split[1..]);
-        dents += 1;
+        // The new surface passes beyond the sample, on the line from the mesh's nearest point
+        // through it (on a face: along its normal, behind the sample when it is outside).
+        let (p, s) = (samples.position(i), values[i]);
+        let away = (p - c.point).try_normalize().unwrap_or(-s.signum() * n);
+        let apex = p + (s.abs() + DENT_MARGIN * h) * away;
+        let f = c.face as usize;
+        let made = match c.barycentric.iter().position(|&b| b > 0.98) {
+            // Nearest a vertex: the vertex itself goes there.
+            Some(j) => splitter.move_vertex(mesh, mesh.faces[f][j], apex),
+            None => splitter.split(mesh, f, c.barycentric, apex).is_some(),
+        };
+        dents += usize::from(made);
     }
     dents
 }
@@ -417,7 +409,7 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
         if found.is_empty() {
             break;
         }
-        let splits = split_where_entered(mesh, &part, &incident, unit, &found, depth);
+        let splits = split_where_entered(mesh, &part, unit, &found, depth);
         added += splits;
         let part = in_unit_box(mesh, unit);
         let entered: Vec<u32> = found.iter().map(|&(i, _)| i).collect();
@@ -534,32 +526,33 @@ fn nearest_around(
     best
 }
 
-/// Where no vertex of the nearest face lies inside an entered sphere (`found`: the sphere and the
-/// mesh's nearest point to its centre, on `part`, the mesh in the unit box, whose faces around
-/// each vertex `incident` holds), a vertex is put at that nearest point: the face is split in
-/// three, or, on an edge, both faces beside it in two (the new faces lie in the old ones' planes,
-/// so none turns over). A face is split once per call, and not where the point lies within a
-/// fiftieth of its barycentric range of a vertex. Returns how many vertices were added.
-fn split_where_entered(
-    mesh: &mut TriMesh,
-    part: &TriMesh,
-    incident: &Incidence,
-    unit: &UnitBox,
-    found: &[(u32, rfta_mesh::ClosestPoint)],
-    depth: f64,
-) -> usize {
-    let mut touched = vec![false; mesh.faces.len()];
-    let mut added = 0;
-    for &(i, ref c) in found {
-        let f = c.face as usize;
-        let s = unit.spheres[i as usize];
-        let holds = |v: u32| (part.vertices[v as usize] - s.center).length() < s.radius - depth;
-        if touched[f] || mesh.faces[f].iter().any(|&v| holds(v)) {
-            continue;
+/// Puts new vertices on a mesh's faces or edges, each face at most once (faces a split has made
+/// or changed are left alone until the next [`Splitter`]).
+struct Splitter {
+    incident: Incidence,
+    touched: Vec<bool>,
+}
+
+impl Splitter {
+    fn new(mesh: &TriMesh) -> Self {
+        Self {
+            incident: Incidence::of(mesh),
+            touched: vec![false; mesh.faces.len()],
+        }
+    }
+
+    /// Adds a vertex at `at` for the point of face `f` with barycentric coordinates `b`: the
+    /// face splits in three, or, within a fiftieth of its barycentric range of an edge, it and
+    /// the face beside that edge split in two each. Not made (`None`) near a vertex, where a face
+    /// was split already, or where a new face would turn against the face it is part of (`at`
+    /// off the face). Returns the new vertex.
+    fn split(&mut self, mesh: &mut TriMesh, f: usize, b: [f64; 3], at: DVec3) -> Option<u32> {
+        if self.touched.get(f).is_none_or(|&t| t) {
+            return None;
         }
         let face = mesh.faces[f];
         let k = mesh.vertices.len() as u32;
-        let on_edge: Vec<usize> = (0..3).filter(|&j| c.barycentric[j] < 0.02).collect();
+        let on_edge: Vec<usize> = (0..3).filter(|&j| b[j] < 0.02).collect();
         let pieces: Vec<(Option<usize>, [u32; 3])> = match on_edge.as_slice() {
             [] => vec![
                 (Some(f), [face[0], face[1], k]),
@@ -567,20 +560,18 @@ fn split_where_entered(
                 (None, [face[2], face[0], k]),
             ],
             &[j] => {
-                // The edge opposite vertex j, u -> v in this face, v -> u in its neighbour.
+                // The edge opposite vertex j, u -> v in this face, v -> u in the one beside it.
                 let (w, u, v) = (face[j], face[(j + 1) % 3], face[(j + 2) % 3]);
-                let beside = incident
+                let g = self
+                    .incident
                     .faces(u)
                     .iter()
                     .map(|&g| g as usize)
-                    .find(|&g| g != f && part.faces[g].contains(&v));
-                let Some(g) = beside.filter(|&g| !touched[g]) else {
-                    continue;
-                };
-                let x = part.faces[g]
-                    .into_iter()
-                    .find(|&x| x != u && x != v)
-                    .unwrap_or(u);
+                    .find(|&g| g != f && mesh.faces[g].contains(&v))?;
+                if self.touched[g] {
+                    return None;
+                }
+                let x = mesh.faces[g].into_iter().find(|&x| x != u && x != v)?;
                 vec![
                     (Some(f), [u, k, w]),
                     (None, [k, v, w]),
@@ -588,24 +579,94 @@ fn split_where_entered(
                     (None, [k, u, x]),
                 ]
             }
-            _ => continue,
+            _ => return None,
         };
-        mesh.vertices.push(
-            face.iter()
-                .zip(c.barycentric)
-                .map(|(&v, b)| mesh.vertices[v as usize] * b)
-                .sum(),
-        );
+        // Each piece against the face it is cut from: `f` (its slot and the new face after it)
+        // or the one beside the edge.
+        let mut from = f;
+        for &(slot, t) in &pieces {
+            from = slot.unwrap_or(from);
+            let [a, b, c] = t.map(|x| {
+                if x == k {
+                    at
+                } else {
+                    mesh.vertices[x as usize]
+                }
+            });
+            if (b - a).cross(c - a).dot(mesh.face_normal_scaled(from)) <= 0.0 {
+                return None;
+            }
+        }
+        mesh.vertices.push(at);
         for (slot, piece) in pieces {
             match slot {
                 Some(g) => {
-                    touched[g] = true;
+                    self.touched[g] = true;
                     mesh.faces[g] = piece;
                 }
                 None => mesh.faces.push(piece),
             }
         }
-        added += 1;
+        Some(k)
+    }
+
+    /// Moves vertex `v` to `to`, unless a face around it was split already or would turn over.
+    fn move_vertex(&mut self, mesh: &mut TriMesh, v: u32, to: DVec3) -> bool {
+        let around = self.incident.faces(v);
+        if around.iter().any(|&f| self.touched[f as usize]) {
+            return false;
+        }
+        let normals: Vec<DVec3> = around
+            .iter()
+            .map(|&f| mesh.face_normal_scaled(f as usize))
+            .collect();
+        let from = std::mem::replace(&mut mesh.vertices[v as usize], to);
+        let turned = around
+            .iter()
+            .zip(&normals)
+            .any(|(&f, n)| mesh.face_normal_scaled(f as usize).dot(*n) <= 0.0);
+        if turned {
+            mesh.vertices[v as usize] = from;
+            return false;
+        }
+        for &f in around {
+            self.touched[f as usize] = true;
+        }
+        true
+    }
+}
+
+/// Where no vertex of the nearest face lies inside an entered sphere (`found`: the sphere and the
+/// mesh's nearest point to its centre, on `part`, the mesh in the unit box), a vertex is put at
+/// that nearest point ([`Splitter::split`]; the new faces lie in the old ones' planes). Returns
+/// how many vertices were added.
+fn split_where_entered(
+    mesh: &mut TriMesh,
+    part: &TriMesh,
+    unit: &UnitBox,
+    found: &[(u32, rfta_mesh::ClosestPoint)],
+    depth: f64,
+) -> usize {
+    let mut splitter = Splitter::new(mesh);
+    let mut added = 0;
+    for &(i, ref c) in found {
+        let f = c.face as usize;
+        let s = unit.spheres[i as usize];
+        // A face split in this call holds a new vertex, which `part` does not have.
+        let holds = |v: u32| {
+            part.vertices
+                .get(v as usize)
+                .is_some_and(|&p| (p - s.center).length() < s.radius - depth)
+        };
+        if splitter.touched[f] || mesh.faces[f].iter().any(|&v| holds(v)) {
+            continue;
+        }
+        let at = mesh.faces[f]
+            .iter()
+            .zip(c.barycentric)
+            .map(|(&v, b)| mesh.vertices[v as usize] * b)
+            .sum();
+        added += usize::from(splitter.split(mesh, f, c.barycentric, at).is_some());
     }
     added
 }
@@ -947,6 +1008,53 @@ mod tests {
         // Its sphere is clear of the dent's apex.
         let apex = mesh.vertices[mesh.vertices.len() - 1];
         assert!(apex.distance(wrong) > 0.01);
+    }
+
+    /// The same where the mesh's point nearest the sample is on an edge (both faces beside it
+    /// split, 2 faces more each) or a vertex (the vertex moves, no face is added); the sample
+    /// ends on its side and the mesh stays closed.
+    #[test]
+    fn a_dent_at_an_edge_or_a_vertex_puts_the_sample_on_its_side() {
+        for at_vertex in [false, true] {
+            let mut mesh = shapes::icosphere(1.0, 2);
+            let [a, b, _] = mesh.triangle(0);
+            let on = if at_vertex { a } else { (a + b) / 2.0 };
+            // Inside the sphere, 0.003 under the surface point, says "outside, 0.01 away".
+            let wrong = on * (1.0 - 0.003 / on.length());
+            let mut positions: Vec<DVec3> = (0..8)
+                .map(|k| {
+                    let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
+                    DVec3::new(bit(0), bit(1), 2.0 + bit(2))
+                })
+                .collect();
+            let mut values: Vec<f64> = positions.iter().map(|p| p.length() - 1.0).collect();
+            positions.push(wrong);
+            values.push(0.01);
+            let samples = SdfSamples::scattered(positions, values).expect("samples");
+            let winding = |m: &TriMesh, p: DVec3| {
+                rfta_mesh::MeshIndex::new(m)
+                    .expect("mesh")
+                    .winding_number(p)
+            };
+            assert!(winding(&mesh, wrong) > 0.5, "inside before");
+            let (faces, vertices) = (mesh.faces.len(), mesh.vertices.len());
+            assert_eq!(
+                dent_wrong_side(&mut mesh, &samples),
+                1,
+                "vertex {at_vertex}"
+            );
+            let more = if at_vertex { (0, 0) } else { (2, 1) };
+            assert_eq!(
+                (mesh.faces.len(), mesh.vertices.len()),
+                (faces + more.0, vertices + more.1)
+            );
+            assert!(
+                winding(&mesh, wrong) < 0.5,
+                "outside after (vertex {at_vertex})"
+            );
+            let topology = rfta_mesh::Topology::of(&mesh);
+            assert!(topology.is_watertight() && topology.is_consistently_oriented());
+        }
     }
 
     fn union(parts: &[TriMesh]) -> TriMesh {
