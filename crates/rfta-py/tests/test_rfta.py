@@ -217,12 +217,18 @@ def test_progress_is_reported_and_an_exception_in_it_stops_the_run():
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT by os.kill")
 def test_ctrl_c_stops_a_long_run():
     S = torus_sdf(grid(40))
+    # A shell that starts this in the background ignores SIGINT, and Python then keeps it
+    # ignored: install the handler that raises KeyboardInterrupt for the test's length.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     start = time.time()
-    with pytest.raises(KeyboardInterrupt):
-        rfta.reconstruct(S, preset="paper", threads=1)
-    timer.cancel()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            rfta.reconstruct(S, preset="paper", threads=1)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     # The paper preset at 41^3 takes far longer; the run stops at the next round.
     assert time.time() - start < 30
 
