@@ -378,7 +378,6 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
     let mut last: Vec<(u32, rfta_mesh::ClosestPoint)> = Vec::new();
     for round in 0..CLEAR_ROUNDS {
         let part = in_unit_box(mesh, unit);
-        let incident = Incidence::of(&part);
         let entry = |i: u32| {
             let s = unit.spheres[i as usize];
             let lo = s.radius - depth;
@@ -399,6 +398,7 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
                 })
                 .collect()
         } else {
+            let incident = Incidence::of(&part);
             last.par_iter()
                 .filter_map(|&(i, ref seed)| {
                     let (c, lo) = entry(i)?;
@@ -969,6 +969,34 @@ mod tests {
     use super::*;
     use rfta_geom::shapes;
 
+    /// Eight samples 0.2 apart, about a spacing beyond the unit sphere, with its exact distances:
+    /// they set the spacing of the dent tests.
+    fn far_samples() -> (Vec<DVec3>, Vec<f64>) {
+        let positions: Vec<DVec3> = (0..8)
+            .map(|k| {
+                let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
+                DVec3::new(bit(0), bit(1), 2.0 + bit(2))
+            })
+            .collect();
+        let values = positions.iter().map(|p| p.length() - 1.0).collect();
+        (positions, values)
+    }
+
+    /// The exact distance to the sphere of radius 0.5 on the 21^3 grid over [-1, 1]^3.
+    fn ball_grid() -> SdfSamples {
+        let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
+        let values = (0..grid.len())
+            .map(|i| grid.position(i).length() - 0.5)
+            .collect();
+        SdfSamples::grid(grid, values).expect("samples")
+    }
+
+    fn winding(mesh: &TriMesh, p: DVec3) -> f64 {
+        rfta_mesh::MeshIndex::new(mesh)
+            .expect("mesh")
+            .winding_number(p)
+    }
+
     #[test]
     fn a_dent_puts_a_sample_whose_small_sphere_a_face_cuts_on_its_side() {
         let mut mesh = shapes::icosphere(1.0, 2);
@@ -977,13 +1005,7 @@ mod tests {
         let centroid = (a + b + c) / 3.0;
         // Eight far samples (0.2 apart) set the spacing; the ninth lies 0.003 inside face 0 and
         // says "outside, 0.01 from the surface": its sphere is cut by the face, no vertex in it.
-        let mut positions: Vec<DVec3> = (0..8)
-            .map(|k| {
-                let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
-                DVec3::new(bit(0), bit(1), 2.0 + bit(2))
-            })
-            .collect();
-        let mut values: Vec<f64> = positions.iter().map(|p| p.length() - 1.0).collect();
+        let (mut positions, mut values) = far_samples();
         let wrong = centroid - 0.003 * n;
         positions.push(wrong);
         values.push(0.01);
@@ -992,11 +1014,6 @@ mod tests {
         positions.push(right);
         values.push(0.01);
         let samples = SdfSamples::scattered(positions, values).expect("samples");
-        let winding = |m: &TriMesh, p: DVec3| {
-            rfta_mesh::MeshIndex::new(m)
-                .expect("mesh")
-                .winding_number(p)
-        };
         assert!(winding(&mesh, wrong) > 0.5, "inside before");
         let faces = mesh.faces.len();
         assert_eq!(dent_wrong_side(&mut mesh, &samples), 1);
@@ -1021,21 +1038,10 @@ mod tests {
             let on = if at_vertex { a } else { (a + b) / 2.0 };
             // Inside the sphere, 0.003 under the surface point, says "outside, 0.01 away".
             let wrong = on * (1.0 - 0.003 / on.length());
-            let mut positions: Vec<DVec3> = (0..8)
-                .map(|k| {
-                    let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
-                    DVec3::new(bit(0), bit(1), 2.0 + bit(2))
-                })
-                .collect();
-            let mut values: Vec<f64> = positions.iter().map(|p| p.length() - 1.0).collect();
+            let (mut positions, mut values) = far_samples();
             positions.push(wrong);
             values.push(0.01);
             let samples = SdfSamples::scattered(positions, values).expect("samples");
-            let winding = |m: &TriMesh, p: DVec3| {
-                rfta_mesh::MeshIndex::new(m)
-                    .expect("mesh")
-                    .winding_number(p)
-            };
             assert!(winding(&mesh, wrong) > 0.5, "inside before");
             let (faces, vertices) = (mesh.faces.len(), mesh.vertices.len());
             assert_eq!(
@@ -1076,12 +1082,7 @@ mod tests {
     /// force), and a surface on the true sphere does not move.
     #[test]
     fn pushed_vertices_leave_every_sphere_and_others_stay() {
-        let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
-        let values = (0..grid.len())
-            .map(|i| grid.position(i).length() - 0.5)
-            .collect();
-        let samples = SdfSamples::grid(grid, values).expect("samples");
-        let unit = UnitBox::new(&samples, None, None);
+        let unit = UnitBox::new(&ball_grid(), None, None);
         let all: Vec<u32> = (0..unit.len() as u32).collect();
         let tree = SphereTree::with_indices(&unit.spheres, &all);
         let depth = PUSH_DEPTH * unit.spacing();
@@ -1145,12 +1146,7 @@ mod tests {
     /// oriented with the same Euler characteristic.
     #[test]
     fn cleared_spheres_are_left_by_faces_too() {
-        let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
-        let values = (0..grid.len())
-            .map(|i| grid.position(i).length() - 0.5)
-            .collect();
-        let samples = SdfSamples::grid(grid, values).expect("samples");
-        let unit = UnitBox::new(&samples, None, None);
+        let unit = UnitBox::new(&ball_grid(), None, None);
         let mut mesh = shapes::icosphere(0.525, 2);
         assert!(
             deepest_entry(&unit, &mesh) > 0.2,
