@@ -90,9 +90,11 @@ pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<(
     match ext.as_str() {
         "obj" => {
             let mesh = rfta_io::read_mesh(path)?;
-            let lines = rfta_io::read_polylines(path)?;
-            if mesh.is_empty() && !lines.is_empty() {
-                return describe_polylines(path, &lines);
+            if mesh.is_empty() {
+                let lines = rfta_io::read_polylines(path)?;
+                if !lines.is_empty() {
+                    return describe_polylines(path, &lines);
+                }
             }
             describe_mesh(path, &mesh)
         }

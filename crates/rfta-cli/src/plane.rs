@@ -118,10 +118,7 @@ pub(crate) fn reconstruct(
             "depth": r.depth,
             "islands_removed": r.islands_removed,
         });
-        rfta_io::write_atomic(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, &json)?;
-            writeln!(w)
-        })?;
+        crate::reconstruct::write_json(path, &json)?;
     }
     if let Some(path) = extras.points {
         let (p, n): (Vec<_>, Vec<_>) = out

@@ -396,8 +396,13 @@ fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result
         "warnings": r.warnings,
         "stopped_early": r.stopped_early,
     });
+    write_json(path, &json)
+}
+
+/// A `--report` file: one JSON object, written atomically.
+pub(crate) fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
     rfta_io::write_atomic(path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &json)?;
+        serde_json::to_writer_pretty(&mut *w, json)?;
         writeln!(w)
     })?;
     Ok(())

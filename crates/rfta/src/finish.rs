@@ -257,43 +257,48 @@ const MOVE_SWEEPS: usize = 8;
 /// a neighbour (at sharp features the faces can be a fiftieth of a spacing across) follows it.
 /// Returns the vertices that moved.
 fn apply_moves(mesh: &mut TriMesh, moved_to: &[Option<DVec3>]) -> Vec<u32> {
+    let targets: Vec<(u32, DVec3)> = (0..mesh.vertices.len() as u32)
+        .filter_map(|v| moved_to[v as usize].map(|t| (v, t)))
+        .collect();
+    if targets.is_empty() {
+        return Vec::new();
+    }
     let normals: Vec<DVec3> = (0..mesh.faces.len())
         .map(|f| mesh.face_normal_scaled(f))
         .collect();
-    let mut around: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
-    for (f, face) in mesh.faces.iter().enumerate() {
-        for &v in face {
-            if moved_to[v as usize].is_some() {
-                around[v as usize].push(f as u32);
-            }
-        }
-    }
-    let turned = |mesh: &TriMesh, v: usize| {
-        around[v]
+    let incident = Incidence::of(mesh);
+    let turned = |mesh: &TriMesh, v: u32| {
+        incident
+            .faces(v)
             .iter()
             .any(|&f| normals[f as usize].dot(mesh.face_normal_scaled(f as usize)) <= 0.0)
     };
-    let original = mesh.vertices.clone();
-    let mut arrived = vec![false; mesh.vertices.len()];
+    let original: Vec<DVec3> = targets
+        .iter()
+        .map(|&(v, _)| mesh.vertices[v as usize])
+        .collect();
+    let mut arrived = vec![false; targets.len()];
     for _ in 0..MOVE_SWEEPS {
-        for v in 0..mesh.vertices.len() {
-            let Some(target) = moved_to[v] else { continue };
-            if arrived[v] {
+        for (k, &(v, target)) in targets.iter().enumerate() {
+            if arrived[k] {
                 continue;
             }
-            let from = mesh.vertices[v];
+            let from = mesh.vertices[v as usize];
             for fraction in [1.0, 0.5, 0.25, 0.125] {
-                mesh.vertices[v] = from + (target - from) * fraction;
+                mesh.vertices[v as usize] = from + (target - from) * fraction;
                 if !turned(mesh, v) {
-                    arrived[v] = fraction == 1.0;
+                    arrived[k] = fraction == 1.0;
                     break;
                 }
-                mesh.vertices[v] = from;
+                mesh.vertices[v as usize] = from;
             }
         }
     }
-    (0..mesh.vertices.len() as u32)
-        .filter(|&v| mesh.vertices[v as usize] != original[v as usize])
+    targets
+        .iter()
+        .zip(&original)
+        .filter(|&(&(v, _), o)| mesh.vertices[v as usize] != *o)
+        .map(|(&(v, _), _)| v)
         .collect()
 }
 

@@ -257,13 +257,13 @@ fn check_separation(samples: &Samples2, max_fraction: f64) -> Result<()> {
         let other: Vec<usize> = (0..v.len())
             .filter(|&j| (v[j] < 0.0) != negative && v[j] != 0.0)
             .collect();
+        if other.is_empty() {
+            continue;
+        }
         let coords: Vec<[f64; 2]> = other.iter().map(|&j| p[j].to_array()).collect();
         let Ok(tree) = ImmutableKdTree::<f64, 2>::new_from_slice(&coords) else {
             continue;
         };
-        if other.is_empty() {
-            continue;
-        }
         severe += (0..v.len())
             .into_par_iter()
             .filter(|&i| (v[i] < 0.0) == negative && v[i] != 0.0)
@@ -319,13 +319,15 @@ fn drop_islands(
     for &e in &curve.edges {
         loops.entry(sets.find(e[0] as usize)).or_default().push(e);
     }
+    let number: std::collections::HashMap<usize, usize> = loops
+        .keys()
+        .enumerate()
+        .map(|(k, &root)| (root, k))
+        .collect();
     let label: Vec<usize> = curve
         .edges
         .iter()
-        .map(|e| {
-            let root = sets.find(e[0] as usize);
-            loops.keys().position(|&r| r == root).unwrap_or(usize::MAX)
-        })
+        .map(|e| number[&sets.find(e[0] as usize)])
         .collect();
     let whole = PolylineIndex::new(&curve);
     let mut keep = vec![true; loops.len()];
@@ -355,15 +357,9 @@ fn drop_islands(
             .sum();
         let inside_negative = area > 0.0;
         let index = PolylineIndex::new(&one);
-        // The rest of the curve, indexed once per small loop (only if a sample needs it).
-        let others = Polylines {
-            vertices: curve.vertices.clone(),
-            edges: (0..curve.edges.len())
-                .filter(|&e| label[e] != k)
-                .map(|e| curve.edges[e])
-                .collect(),
-        };
-        let mut rest_index: Option<PolylineIndex<'_>> = None;
+        // The rest of the curve, built and indexed once per small loop, if a sample needs it.
+        let others = std::cell::OnceCell::new();
+        let rest_index = std::cell::OnceCell::new();
         let mut witnesses = 0;
         let mut supported = false;
         for (c, &v) in circles.iter().zip(values) {
@@ -379,7 +375,17 @@ fn drop_islands(
             let nearest = whole.closest(c.center);
             let rest = if label[nearest.edge] == k {
                 rest_index
-                    .get_or_insert_with(|| PolylineIndex::new(&others))
+                    .get_or_init(|| {
+                        PolylineIndex::new(others.get_or_init(|| {
+                            Polylines {
+                                vertices: curve.vertices.clone(),
+                                edges: (0..curve.edges.len())
+                                    .filter(|&e| label[e] != k)
+                                    .map(|e| curve.edges[e])
+                                    .collect(),
+                            }
+                        }))
+                    })
                     .closest(c.center)
                     .distance
             } else {
