@@ -14,6 +14,11 @@
 //!   turn, 5 runs each, for the thread speed-up (this VM's speed drifts by a quarter over
 //!   seconds; the row is the run of median wall time, the speed-up line gives medians and
 //!   fastest runs, and every repeat must write the same mesh);
+//! - at the first `--res`, between those runs, a perfectly parallel workload of fixed size on 1
+//!   and 2 threads ([`ceiling_work`]): the speed-up this machine gives at that moment to work
+//!   with no serial part, the ceiling the pipeline's speed-up is read against (2.0x on the
+//!   project's idle VM; anything else running on the machine, or a host that gives its two
+//!   cores less than two cores' time, shows there first);
 //! - `rfta-fast` (`--preset fast`, gpytoolbox's 3 rounds) on 2 threads;
 //! - `mc`, marching cubes;
 //! - `gpytoolbox`, `reach_for_the_arcs` with its defaults, when a Python with gpytoolbox is found
@@ -196,7 +201,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         let mut these: Vec<(&str, usize)> = Vec::new();
         if scaling {
             for _ in 0..SCALING_REPEATS {
-                these.extend([("rfta", 2), ("rfta", 1)]);
+                these.extend([("rfta", 2), ("rfta", 1), ("ceiling", 2), ("ceiling", 1)]);
             }
         } else {
             these.push(("rfta", 2));
@@ -214,6 +219,18 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             ));
             let r = child(&exe, python.as_deref(), method, threads, input, &mesh_path).and_then(
                 |(wall, cpu, rss_mb)| {
+                    if method == "ceiling" {
+                        return Ok(Run {
+                            wall,
+                            cpu,
+                            rss_mb,
+                            chamfer: f64::NAN,
+                            faces: 0,
+                            watertight: true,
+                            walls: vec![wall],
+                            hash: 0,
+                        });
+                    }
                     let bytes = std::fs::read(&mesh_path)?;
                     let hash = {
                         let mut h = std::hash::DefaultHasher::new();
@@ -454,44 +471,32 @@ fn report(
         "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (10 ms resolution: marching cubes shows 0). With more than one run (the default preset on 1 and 2 threads, {SCALING_REPEATS} runs each, alternating), a row is the run of median wall time.\n"
     )?;
     for &n in &ns {
-        let walls = |t: usize| -> Vec<(&str, &[f64])> {
-            rows.iter()
-                .filter(|(_, nn, m, tt, _)| *nn == n && m == "rfta" && *tt == t)
-                .filter_map(|(sh, _, _, _, r)| r.as_ref().ok().map(|r| (sh.as_str(), &r.walls[..])))
-                .collect()
-        };
-        let (one, two) = (walls(1), walls(2));
-        let pairs: Vec<(&[f64], &[f64])> = one
-            .iter()
-            .filter_map(|(sh, w1)| {
-                two.iter()
-                    .find(|(s2, _)| s2 == sh)
-                    .map(|(_, w2)| (*w1, *w2))
-            })
-            .collect();
-        if pairs.is_empty() {
+        let Some(rfta) = Scaling::of(rows, n, "rfta") else {
             continue;
-        }
-        let total = |pick: &dyn Fn(&[f64]) -> f64, side: usize| -> f64 {
-            pairs
-                .iter()
-                .map(|p| pick(if side == 1 { p.0 } else { p.1 }))
-                .sum()
         };
-        let median = |w: &[f64]| w[(w.len() - 1) / 2];
-        let fastest = |w: &[f64]| w[0];
-        let runs = pairs[0].0.len();
         writeln!(
             s,
-            "From 1 to 2 threads at N = {n} ({} shapes, {runs} runs each per thread count): median wall time per shape {:.2} to {:.2} s, **{:.2}x**; fastest runs {:.2} to {:.2} s, {:.2}x.\n",
-            pairs.len(),
-            total(&median, 1) / pairs.len() as f64,
-            total(&median, 2) / pairs.len() as f64,
-            total(&median, 1) / total(&median, 2),
-            total(&fastest, 1) / pairs.len() as f64,
-            total(&fastest, 2) / pairs.len() as f64,
-            total(&fastest, 1) / total(&fastest, 2),
+            "From 1 to 2 threads at N = {n} ({} shapes, {} runs each per thread count): median wall time per shape {:.2} to {:.2} s, **{:.2}x**; fastest runs {:.2} to {:.2} s, {:.2}x.\n",
+            rfta.shapes,
+            rfta.runs,
+            rfta.median.0,
+            rfta.median.1,
+            rfta.median.0 / rfta.median.1,
+            rfta.fastest.0,
+            rfta.fastest.1,
+            rfta.fastest.0 / rfta.fastest.1,
         )?;
+        if let Some(c) = Scaling::of(rows, n, "ceiling") {
+            let (ceiling, ours) = (c.median.0 / c.median.1, rfta.median.0 / rfta.median.1);
+            writeln!(
+                s,
+                "The machine's ceiling in the same loop (a perfectly parallel workload, run between them the same number of times): median {:.2} to {:.2} s, **{ceiling:.2}x**; fastest {:.2}x. The pipeline's speed-up is {:.0}% of the ceiling's (median runs).\n",
+                c.median.0,
+                c.median.1,
+                c.fastest.0 / c.fastest.1,
+                100.0 * (ours - 1.0) / (ceiling - 1.0).max(f64::EPSILON),
+            )?;
+        }
     }
     writeln!(
         s,
@@ -513,6 +518,75 @@ fn report(
         }
     }
     Ok(s)
+}
+
+/// The 1- and 2-thread runs of one method at one resolution, over the shapes that have both:
+/// mean wall time per shape of the median and of the fastest runs, `(1 thread, 2 threads)`.
+struct Scaling {
+    shapes: usize,
+    runs: usize,
+    median: (f64, f64),
+    fastest: (f64, f64),
+}
+
+impl Scaling {
+    fn of(
+        rows: &[(String, usize, String, usize, Result<Run>)],
+        n: usize,
+        method: &str,
+    ) -> Option<Self> {
+        let walls = |t: usize| -> Vec<(&str, &[f64])> {
+            rows.iter()
+                .filter(|(_, nn, m, tt, _)| *nn == n && m == method && *tt == t)
+                .filter_map(|(sh, _, _, _, r)| r.as_ref().ok().map(|r| (sh.as_str(), &r.walls[..])))
+                .collect()
+        };
+        let (one, two) = (walls(1), walls(2));
+        let pairs: Vec<(&[f64], &[f64])> = one
+            .iter()
+            .filter_map(|(sh, w1)| {
+                two.iter()
+                    .find(|(s2, _)| s2 == sh)
+                    .map(|(_, w2)| (*w1, *w2))
+            })
+            .collect();
+        let k = pairs.len() as f64;
+        let mean = |pick: &dyn Fn(&[f64]) -> f64| -> (f64, f64) {
+            (
+                pairs.iter().map(|p| pick(p.0)).sum::<f64>() / k,
+                pairs.iter().map(|p| pick(p.1)).sum::<f64>() / k,
+            )
+        };
+        Some(Self {
+            shapes: pairs.len(),
+            runs: pairs.first()?.0.len(),
+            median: mean(&|w| w[(w.len() - 1) / 2]),
+            fastest: mean(&|w| w[0]),
+        })
+    }
+}
+
+/// The ceiling's workload: 64 equal tasks, each 2,000 passes of arithmetic over a private
+/// 32 KiB buffer (in a core's own cache), handed out one at a time, so nothing is serial,
+/// shared or unbalanced: what 2 threads gain over 1 on it is what this machine gives at that
+/// moment (about 0.8 s on one thread of the project's VM). Returns a checksum, so that the work
+/// is not optimized away.
+fn ceiling_work() -> f64 {
+    use rayon::prelude::*;
+    (0..64u32)
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|task| {
+            let mut x: Vec<f64> = (0..4096).map(|i| f64::from(i + task) * 1e-3).collect();
+            for pass in 0..2000 {
+                let a = 1.0 - 1e-7 * f64::from(pass);
+                for v in &mut x {
+                    *v = (*v * a + 1e-9).sqrt() * 1.0001;
+                }
+            }
+            x.iter().sum::<f64>()
+        })
+        .sum()
 }
 
 /// A Python that imports gpytoolbox: `--python`, else `python3` if it has it.
@@ -611,6 +685,21 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         bail!("bench-child e2e METHOD SDF MESH THREADS");
     };
     let threads: usize = threads.parse()?;
+    if method == "ceiling" {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let cpu0 = super::process_usage().0;
+        let t = Instant::now();
+        let check = pool.install(ceiling_work);
+        let wall = t.elapsed().as_secs_f64();
+        let (cpu, rss_mb) = super::process_usage();
+        println!(
+            "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"check\": {check}}}",
+            cpu - cpu0
+        );
+        return Ok(());
+    }
     let path = Path::new(sdf);
     let samples = rfta_io::read_sdf(path, None)?.validate(path)?;
     let cpu0 = super::process_usage().0;
