@@ -732,3 +732,53 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(walls: &[f64]) -> Result<Run> {
+        Ok(Run {
+            wall: walls[(walls.len() - 1) / 2],
+            cpu: 0.0,
+            rss_mb: 0.0,
+            chamfer: f64::NAN,
+            faces: 0,
+            watertight: true,
+            walls: walls.to_vec(),
+            hash: 0,
+        })
+    }
+
+    #[test]
+    fn the_speed_up_pairs_shapes_and_takes_medians_and_fastest_runs() {
+        let row = |shape: &str, method: &str, threads, walls: &[f64]| {
+            (
+                shape.to_string(),
+                20,
+                method.to_string(),
+                threads,
+                run(walls),
+            )
+        };
+        let rows = vec![
+            row("a", "rfta", 1, &[1.0, 2.0, 3.0]),
+            row("a", "rfta", 2, &[0.5, 1.0, 2.0]),
+            row("b", "rfta", 1, &[3.0, 4.0, 9.0]),
+            row("b", "rfta", 2, &[2.0, 2.0, 2.0]),
+            // No 2-thread run: left out of the pairs.
+            row("c", "rfta", 1, &[10.0, 10.0, 10.0]),
+            row("a", "ceiling", 1, &[0.6, 0.6, 0.6]),
+            row("a", "ceiling", 2, &[0.3, 0.3, 0.4]),
+        ];
+        let s = Scaling::of(&rows, 20, "rfta").expect("two shapes have both");
+        assert_eq!((s.shapes, s.runs), (2, 3));
+        // Medians (2 + 4) / 2 and (1 + 2) / 2; fastest (1 + 3) / 2 and (0.5 + 2) / 2.
+        assert_eq!(s.median, (3.0, 1.5));
+        assert_eq!(s.fastest, (2.0, 1.25));
+        let c = Scaling::of(&rows, 20, "ceiling").expect("one shape");
+        assert_eq!(c.median, (0.6, 0.3));
+        assert!(Scaling::of(&rows, 30, "rfta").is_none());
+        assert!(Scaling::of(&rows, 20, "mc").is_none());
+    }
+}
