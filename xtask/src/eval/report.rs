@@ -8,8 +8,18 @@ use anyhow::Result;
 
 use super::Row;
 
-/// Reference metrics by (shape, n, our method name): (chamfer, hausdorff, e_sdf, cpu seconds).
-pub(crate) type Reference = HashMap<(String, usize, String), (f64, f64, f64, f64)>;
+/// Reference metrics by (shape, n, our method name).
+pub(crate) type Reference = HashMap<(String, usize, String), RefRow>;
+
+/// One reference result.
+pub(crate) struct RefRow {
+    chamfer: f64,
+    hausdorff: f64,
+    e_sdf: f64,
+    cpu: f64,
+    /// The ground truth's genus and one component; `None` where the file has no topology.
+    right_topology: Option<bool>,
+}
 
 /// Reads `reference/gpytoolbox.csv` if present (methods `mc`, `rfta`, `rfta_paper`, `dcsdd`).
 pub(crate) fn read_reference(path: &Path) -> Reference {
@@ -35,6 +45,7 @@ pub(crate) fn read_reference(path: &Path) -> Reference {
     ) else {
         return map;
     };
+    let (genus, gt_genus, components) = (col("genus"), col("gt_genus"), col("components"));
     for l in lines {
         let r: Vec<&str> = l.split(',').collect();
         if r.len() < cols.len() || r[st] != "ok" {
@@ -42,10 +53,20 @@ pub(crate) fn read_reference(path: &Path) -> Reference {
         }
         let num = |i: usize| r[i].parse::<f64>().unwrap_or(f64::NAN);
         let method = r[me].replace('_', "-");
+        let right_topology = match (genus, gt_genus, components) {
+            (Some(g), Some(t), Some(c)) => Some(num(g) == num(t) && num(c) == 1.0),
+            _ => None,
+        };
         if let Ok(n) = r[nn].parse() {
             map.insert(
                 (r[m].to_string(), n, method),
-                (num(ch), num(ha), num(es), num(cpu)),
+                RefRow {
+                    chamfer: num(ch),
+                    hausdorff: num(ha),
+                    e_sdf: num(es),
+                    cpu: num(cpu),
+                    right_topology,
+                },
             );
         }
     }
@@ -172,14 +193,10 @@ pub(crate) fn write_markdown(
         (
             "Chamfer",
             (|r: &Row| r.chamfer) as fn(&Row) -> f64,
-            (|v: &(f64, f64, f64, f64)| v.0) as fn(&(f64, f64, f64, f64)) -> f64,
+            (|v: &RefRow| v.chamfer) as fn(&RefRow) -> f64,
         ),
-        (
-            "Hausdorff",
-            |r: &Row| r.hausdorff,
-            |v: &(f64, f64, f64, f64)| v.1,
-        ),
-        ("E_SDF", |r: &Row| r.e_sdf, |v: &(f64, f64, f64, f64)| v.2),
+        ("Hausdorff", |r: &Row| r.hausdorff, |v: &RefRow| v.hausdorff),
+        ("E_SDF", |r: &Row| r.e_sdf, |v: &RefRow| v.e_sdf),
     ] {
         writeln!(s, "## Mean {metric}\n")?;
         for (subset, keep) in subsets {
@@ -232,7 +249,7 @@ pub(crate) fn write_markdown(
             writeln!(s)?;
         }
     }
-    write_consistency(&mut s, rows, res, methods)?;
+    write_consistency(&mut s, rows, reference, res, methods)?;
     writeln!(s, "## Time\n")?;
     writeln!(
         s,
@@ -261,7 +278,7 @@ pub(crate) fn write_markdown(
                     .filter_map(|r| {
                         reference
                             .get(&(r.shape.clone(), n, reference_method(m)))
-                            .map(|v| v.3)
+                            .map(|v| v.cpu)
                     }),
             );
             let ratio = match (t, mc) {
@@ -290,7 +307,7 @@ pub(crate) fn write_markdown(
     for r in rows {
         let refc = reference
             .get(&(r.shape.clone(), r.n, reference_method(&r.method)))
-            .map(|v| format!("{:.5}", v.0))
+            .map(|v| format!("{:.5}", v.chamfer))
             .unwrap_or_else(|| "n/a".into());
         let g = r.genus.map(|g| g.to_string()).unwrap_or_else(|| "-".into());
         let gt = r
@@ -328,13 +345,14 @@ pub(crate) fn write_markdown(
 fn write_consistency(
     s: &mut String,
     rows: &[Row],
+    reference: &Reference,
     res: &[usize],
     methods: &[String],
 ) -> Result<()> {
     writeln!(s, "## Agreement with the samples and the topology\n")?;
     writeln!(
         s,
-        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; the shapes whose output has the ground truth's genus and one component.\n",
+        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; the shapes whose output has the ground truth's genus and one component. The reference rows give the last column for the shared data's results on the same shapes (the other columns were not measured for them).\n",
         rfta::consistency::SIGN_MARGIN,
         rfta::consistency::ENTER_MARGIN
     )?;
@@ -366,6 +384,30 @@ fn write_consistency(
                 "| {n} | {m} | {} of {} | {wrong} ({wrong_shapes}) | {entered} ({entered_shapes}) | {worst:.2} | {right} |",
                 done.len(),
                 sel.len()
+            )?;
+        }
+        let mut shapes: Vec<&str> = rows
+            .iter()
+            .filter(|r| r.n == n)
+            .map(|r| r.shape.as_str())
+            .collect();
+        shapes.sort_unstable();
+        shapes.dedup();
+        for m in ["mc", "rfta", "rfta-paper", "dcsdd"] {
+            let known: Vec<bool> = shapes
+                .iter()
+                .filter_map(|sh| reference.get(&(sh.to_string(), n, m.to_string())))
+                .filter_map(|v| v.right_topology)
+                .collect();
+            if known.is_empty() {
+                continue;
+            }
+            writeln!(
+                s,
+                "| {n} | reference {m} | {} of {} | - | - | - | {} |",
+                known.len(),
+                shapes.len(),
+                known.iter().filter(|&&k| k).count()
             )?;
         }
     }
@@ -405,7 +447,7 @@ pub(crate) fn write_svg(
                         .filter_map(|r| {
                             reference
                                 .get(&(r.shape.clone(), n, reference_method(m)))
-                                .map(|v| v.0)
+                                .map(|v| v.chamfer)
                         }),
                 )
                 .map(|(v, _)| (n, v))
@@ -541,4 +583,47 @@ pub(crate) fn line_chart(
     s.push_str("</svg>\n");
     rfta_io::write_atomic(path, |wr| wr.write_all(s.as_bytes()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reference_topology_is_the_ground_truths_genus_with_one_component() -> Result<()> {
+        let dir = std::env::temp_dir().join(format!("rfta-ref-{}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        let csv = dir.join("gpytoolbox.csv");
+        std::fs::write(
+            &csv,
+            "mesh,n,method,seconds,cpu_seconds,chamfer,hausdorff,sdf_energy,genus,gt_genus,components,status\n\
+             a,20,mc,0,0.5,0.1,0.2,0.3,1,1,1,ok\n\
+             b,20,mc,0,0.5,0.1,0.2,0.3,1,1,2,ok\n\
+             c,20,mc,0,0.5,0.1,0.2,0.3,0,1,1,ok\n\
+             d,20,mc,0,0.5,0.1,0.2,0.3,1,1,1,timeout\n\
+             a,20,rfta_paper,0,7.0,0.4,0.5,0.6,2,2,1,ok\n",
+        )?;
+        let reference = read_reference(&csv);
+        std::fs::remove_dir_all(&dir)?;
+        let right = |shape: &str, m: &str| {
+            reference
+                .get(&(shape.to_string(), 20, m.to_string()))
+                .and_then(|r| r.right_topology)
+        };
+        assert_eq!(right("a", "mc"), Some(true));
+        assert_eq!(right("b", "mc"), Some(false), "two components");
+        assert_eq!(right("c", "mc"), Some(false), "wrong genus");
+        assert_eq!(right("d", "mc"), None, "not ok: not read");
+        assert_eq!(right("a", "rfta-paper"), Some(true));
+        let a = &reference[&("a".to_string(), 20, "rfta-paper".to_string())];
+        assert_eq!((a.chamfer, a.cpu), (0.4, 7.0));
+
+        let mut s = String::new();
+        write_consistency(&mut s, &[], &reference, &[20], &[])?;
+        assert!(
+            !s.contains("| reference"),
+            "no shapes evaluated, no reference rows"
+        );
+        Ok(())
+    }
 }
