@@ -147,7 +147,7 @@ impl Part {
     /// obvhs's tree over `faces`, flattened with exact `f64` boxes.
     fn build(corners: &[[DVec3; 3]], faces: &[u32]) -> Part {
         let boxes: Vec<TriBox> = faces
-            .iter()
+            .par_iter()
             .map(|&f| TriBox(to_obvhs(&Aabb::from_points(corners[f as usize].iter()))))
             .collect();
         let ob = build_bvh2(

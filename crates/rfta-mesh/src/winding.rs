@@ -52,6 +52,7 @@ pub(crate) struct Moments {
 
 /// Computes every node's moments bottom-up (children have larger indices than parents).
 pub(crate) fn node_moments(index: &MeshIndex) -> Vec<Moments> {
+    use rayon::prelude::*;
     let zero = Moments {
         area: 0.0,
         normal: DVec3::ZERO,
@@ -59,65 +60,86 @@ pub(crate) fn node_moments(index: &MeshIndex) -> Vec<Moments> {
         first: DMat3::ZERO,
         radius: 0.0,
     };
-    let mut m = vec![zero; index.nodes.len()];
+    // The leaves (most of the work: every triangle) side by side, then the inner nodes from the
+    // bottom up (children come after their parent); each node's sums are the same either way.
+    let mut m: Vec<Moments> = index
+        .nodes
+        .par_iter()
+        .map(|node| {
+            if node.leaf {
+                with_radius(leaf_moments(index, node), node)
+            } else {
+                zero
+            }
+        })
+        .collect();
     for idx in (0..index.nodes.len()).rev() {
         let node = index.nodes[idx];
-        let box_center = node.bounds.center();
-        let mut out = if node.leaf {
-            let tris = &index.tris[node.a as usize..(node.a + node.b) as usize];
-            let mut area = 0.0;
-            let mut normal = DVec3::ZERO;
-            let mut weighted = DVec3::ZERO;
-            for [a, b, c] in tris {
-                let an = 0.5 * (*b - *a).cross(*c - *a);
-                let ar = an.length();
-                area += ar;
-                normal += an;
-                weighted += ar * (*a + *b + *c) / 3.0;
-            }
-            let center = if area > 0.0 {
-                weighted / area
-            } else {
-                box_center
-            };
-            let mut first = DMat3::ZERO;
-            for [a, b, c] in tris {
-                let an = 0.5 * (*b - *a).cross(*c - *a);
-                first += outer(an, (*a + *b + *c) / 3.0 - center);
-            }
-            Moments {
-                area,
-                normal,
-                center,
-                first,
-                radius: 0.0,
-            }
+        if node.leaf {
+            continue;
+        }
+        let (l, r) = (m[node.a as usize], m[node.b as usize]);
+        let area = l.area + r.area;
+        let center = if area > 0.0 {
+            (l.area * l.center + r.area * r.center) / area
         } else {
-            let (l, r) = (m[node.a as usize], m[node.b as usize]);
-            let area = l.area + r.area;
-            let center = if area > 0.0 {
-                (l.area * l.center + r.area * r.center) / area
-            } else {
-                box_center
-            };
-            let first = l.first
-                + outer(l.normal, l.center - center)
-                + r.first
-                + outer(r.normal, r.center - center);
-            Moments {
-                area,
-                normal: l.normal + r.normal,
-                center,
-                first,
-                radius: 0.0,
-            }
+            node.bounds.center()
         };
-        let far = (out.center - node.bounds.min)
-            .abs()
-            .max((node.bounds.max - out.center).abs());
-        out.radius = far.length();
-        m[idx] = out;
+        let first = l.first
+            + outer(l.normal, l.center - center)
+            + r.first
+            + outer(r.normal, r.center - center);
+        let out = Moments {
+            area,
+            normal: l.normal + r.normal,
+            center,
+            first,
+            radius: 0.0,
+        };
+        m[idx] = with_radius(out, &node);
     }
+    m
+}
+
+/// The moments of a leaf's triangles about their area-weighted centroid (the box centre when
+/// they have no area).
+fn leaf_moments(index: &MeshIndex, node: &crate::bvh::Node) -> Moments {
+    let tris = &index.tris[node.a as usize..(node.a + node.b) as usize];
+    let mut area = 0.0;
+    let mut normal = DVec3::ZERO;
+    let mut weighted = DVec3::ZERO;
+    for [a, b, c] in tris {
+        let an = 0.5 * (*b - *a).cross(*c - *a);
+        let ar = an.length();
+        area += ar;
+        normal += an;
+        weighted += ar * (*a + *b + *c) / 3.0;
+    }
+    let center = if area > 0.0 {
+        weighted / area
+    } else {
+        node.bounds.center()
+    };
+    let mut first = DMat3::ZERO;
+    for [a, b, c] in tris {
+        let an = 0.5 * (*b - *a).cross(*c - *a);
+        first += outer(an, (*a + *b + *c) / 3.0 - center);
+    }
+    Moments {
+        area,
+        normal,
+        center,
+        first,
+        radius: 0.0,
+    }
+}
+
+/// `m` with the radius of its node's box about its centre.
+fn with_radius(mut m: Moments, node: &crate::bvh::Node) -> Moments {
+    let far = (m.center - node.bounds.min)
+        .abs()
+        .max((node.bounds.max - m.center).abs());
+    m.radius = far.length();
     m
 }
 
