@@ -182,7 +182,8 @@ fn dent_wrong_side(mesh: &mut TriMesh, samples: &SdfSamples) -> usize {
             (inside != (s < 0.0)).then_some((i, c))
         })
         .collect();
-    let mut splitter = Splitter::new(mesh);
+    let incident = Incidence::of(mesh);
+    let mut splitter = Splitter::new(&incident, mesh);
     let mut dents = 0;
     for (i, c) in wrong {
         let n = mesh.face_normal_scaled(c.face as usize).normalize_or_zero();
@@ -244,7 +245,7 @@ fn push_out_of_spheres(mesh: &mut TriMesh, unit: &UnitBox, tree: &SphereTree, de
             moved.then(|| unit.to_input(p))
         })
         .collect();
-    apply_moves(mesh, &moved_to);
+    apply_moves(mesh, &Incidence::of(mesh), &moved_to);
 }
 
 /// How many times [`apply_moves`] goes over the vertices.
@@ -255,8 +256,8 @@ const MOVE_SWEEPS: usize = 8;
 /// or an eighth of it that turns none of its faces over (a face's normal against the one it had),
 /// given where its neighbours are by then; [`MOVE_SWEEPS`] sweeps, so that a vertex held back by
 /// a neighbour (at sharp features the faces can be a fiftieth of a spacing across) follows it.
-/// Returns the vertices that moved.
-fn apply_moves(mesh: &mut TriMesh, moved_to: &[Option<DVec3>]) -> Vec<u32> {
+/// `incident` holds the mesh's faces around each vertex. Returns the vertices that moved.
+fn apply_moves(mesh: &mut TriMesh, incident: &Incidence, moved_to: &[Option<DVec3>]) -> Vec<u32> {
     let targets: Vec<(u32, DVec3)> = (0..mesh.vertices.len() as u32)
         .filter_map(|v| moved_to[v as usize].map(|t| (v, t)))
         .collect();
@@ -266,7 +267,6 @@ fn apply_moves(mesh: &mut TriMesh, moved_to: &[Option<DVec3>]) -> Vec<u32> {
     let normals: Vec<DVec3> = (0..mesh.faces.len())
         .map(|f| mesh.face_normal_scaled(f))
         .collect();
-    let incident = Incidence::of(mesh);
     let turned = |mesh: &TriMesh, v: u32| {
         incident
             .faces(v)
@@ -381,6 +381,8 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
     let mut added = 0;
     // The spheres entered in the last round, each with the face that came nearest its centre.
     let mut last: Vec<(u32, rfta_mesh::ClosestPoint)> = Vec::new();
+    // The faces around each vertex: only splits change them.
+    let mut incident = Incidence::of(mesh);
     for round in 0..CLEAR_ROUNDS {
         let part = in_unit_box(mesh, unit);
         let entry = |i: u32| {
@@ -403,7 +405,6 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
                 })
                 .collect()
         } else {
-            let incident = Incidence::of(&part);
             last.par_iter()
                 .filter_map(|&(i, ref seed)| {
                     let (c, lo) = entry(i)?;
@@ -414,12 +415,16 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
         if found.is_empty() {
             break;
         }
-        let splits = split_where_entered(mesh, &part, unit, &found, depth);
+        let splits = split_where_entered(mesh, &part, &incident, unit, &found, depth);
         added += splits;
-        let part = in_unit_box(mesh, unit);
+        let part = if splits > 0 {
+            incident = Incidence::of(mesh);
+            in_unit_box(mesh, unit)
+        } else {
+            part
+        };
         let entered: Vec<u32> = found.iter().map(|&(i, _)| i).collect();
         let tree = SphereTree::with_indices(&unit.spheres, &entered);
-        let incident = Incidence::of(&part);
         // The vertices inside entered spheres: each sphere's cap, grown from the face nearest
         // its centre (the face's slot holds a piece of it after a split).
         let mut inside: Vec<u32> = found
@@ -480,7 +485,7 @@ fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> 
         for (&v, t) in inside.iter().zip(targets) {
             moved_to[v as usize] = t;
         }
-        let moved = apply_moves(mesh, &moved_to);
+        let moved = apply_moves(mesh, &incident, &moved_to);
         if moved.is_empty() && splits == 0 {
             break;
         }
@@ -532,16 +537,17 @@ fn nearest_around(
 }
 
 /// Puts new vertices on a mesh's faces or edges, each face at most once (faces a split has made
-/// or changed are left alone until the next [`Splitter`]).
-struct Splitter {
-    incident: Incidence,
+/// or changed are left alone until the next [`Splitter`]), given the faces around each vertex
+/// before the first split.
+struct Splitter<'a> {
+    incident: &'a Incidence,
     touched: Vec<bool>,
 }
 
-impl Splitter {
-    fn new(mesh: &TriMesh) -> Self {
+impl<'a> Splitter<'a> {
+    fn new(incident: &'a Incidence, mesh: &TriMesh) -> Self {
         Self {
-            incident: Incidence::of(mesh),
+            incident,
             touched: vec![false; mesh.faces.len()],
         }
     }
@@ -642,17 +648,18 @@ impl Splitter {
 }
 
 /// Where no vertex of the nearest face lies inside an entered sphere (`found`: the sphere and the
-/// mesh's nearest point to its centre, on `part`, the mesh in the unit box), a vertex is put at
-/// that nearest point ([`Splitter::split`]; the new faces lie in the old ones' planes). Returns
-/// how many vertices were added.
+/// mesh's nearest point to its centre, on `part`, the mesh in the unit box, whose faces around
+/// each vertex `incident` holds), a vertex is put at that nearest point ([`Splitter::split`]; the
+/// new faces lie in the old ones' planes). Returns how many vertices were added.
 fn split_where_entered(
     mesh: &mut TriMesh,
     part: &TriMesh,
+    incident: &Incidence,
     unit: &UnitBox,
     found: &[(u32, rfta_mesh::ClosestPoint)],
     depth: f64,
 ) -> usize {
-    let mut splitter = Splitter::new(mesh);
+    let mut splitter = Splitter::new(incident, mesh);
     let mut added = 0;
     for &(i, ref c) in found {
         let f = c.face as usize;
