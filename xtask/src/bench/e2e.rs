@@ -505,6 +505,12 @@ fn report(
     writeln!(s, "|{}", "---|".repeat(10))?;
     for (shape, n, m, t, r) in rows {
         match r {
+            // The ceiling's workload writes no mesh.
+            Ok(r) if m == "ceiling" => writeln!(
+                s,
+                "| {shape} | {n} | {m} | {t} | {:.2} | {:.2} | {:.0} | - | - | - |",
+                r.wall, r.cpu, r.rss_mb
+            )?,
             Ok(r) => writeln!(
                 s,
                 "| {shape} | {n} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {} | {} |",
