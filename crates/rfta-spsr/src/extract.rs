@@ -106,6 +106,17 @@ struct LeafOut {
     broken: bool,
 }
 
+/// What one task of [`extract`] gathers from its leaves, in leaf order: each leaf's vertices
+/// (by key, once per leaf), its triangles (vertex keys, or `CENTRE` and the index of a centre
+/// in `centres`), the centres of its fans, and how many of its leaves had a broken loop.
+#[derive(Default)]
+struct Patch {
+    verts: Vec<(u64, DVec3)>,
+    tris: Vec<[u64; 3]>,
+    centres: Vec<DVec3>,
+    broken_leaves: usize,
+}
+
 impl Ctx<'_> {
     fn vertex(&self, a: BPoint, b: BPoint, out: &mut LeafOut) -> u64 {
         let (lo, hi) = if a.q <= b.q { (a, b) } else { (b, a) };
@@ -396,116 +407,50 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
     cand.dedup();
 
     // Leaves vary in work (most hold one small loop, a few several): tasks of at most
-    // `LEAVES_PER_TASK` keep both threads busy to the end.
-    let results: Vec<(LeafOut, Vec<[u64; 3]>, Vec<DVec3>)> = cand
-        .par_iter()
-        .with_max_len(LEAVES_PER_TASK)
-        .map(|&(d, ci)| {
-            let level = &levels[d as usize];
-            let c = crate::keys::demorton(level.cells[ci as usize]);
-            let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+    // `LEAVES_PER_TASK` keep both threads busy to the end. Each task gathers its leaves' output
+    // in one `Patch`, reusing one leaf's scratch space.
+    let patches: Vec<Patch> = cand
+        .par_chunks(LEAVES_PER_TASK)
+        .map(|leaves| {
+            let mut patch = Patch::default();
             let mut out = LeafOut::default();
-            for f in 0..6 {
-                ctx.face(d, c, f, &mut out);
+            for &(d, ci) in leaves {
+                out.verts.clear();
+                out.segs.clear();
+                out.broken = false;
+                ctx.leaf(d, ci, &mut out, &mut patch);
             }
-            let mut tris = Vec::new();
-            let mut centres = Vec::new();
-            if out.segs.is_empty() {
-                return (out, tris, centres);
-            }
-            // Positions by key (first occurrence; duplicates are identical).
-            out.verts.sort_by_key(|v| v.0);
-            out.verts.dedup_by_key(|v| v.0);
-            let pos_of = |k: u64| {
-                let i = out.verts.partition_point(|v| v.0 < k);
-                out.verts[i].1
-            };
-            let lo = ctx.finest(d, c);
-            let size = 1u32 << (depth - d);
-            let mut used = vec![false; out.segs.len()];
-            let mut broken = false;
-            for s0 in 0..out.segs.len() {
-                if used[s0] {
-                    continue;
-                }
-                used[s0] = true;
-                let mut lp = vec![out.segs[s0].0];
-                let mut cur = out.segs[s0].1;
-                let mut closed = false;
-                for _ in 0..out.segs.len() {
-                    if cur == lp[0] {
-                        closed = true;
-                        break;
-                    }
-                    lp.push(cur);
-                    match (0..out.segs.len()).find(|&s| !used[s] && out.segs[s].0 == cur) {
-                        Some(s) => {
-                            used[s] = true;
-                            cur = out.segs[s].1;
-                        }
-                        None => break,
-                    }
-                }
-                if !closed {
-                    broken = true;
-                    continue;
-                }
-                if lp.len() < 3 {
-                    // Two segments joining the same two vertices on two faces of this cell: the
-                    // surface only grazes the cell (an edge whose middle has the other sign). The
-                    // patch here has no area; the two cells across those faces each hold the edge
-                    // once, with opposite orientations, so nothing is emitted.
-                    continue;
-                }
-                let pos: Vec<DVec3> = lp.iter().map(|&k| pos_of(k)).collect();
-                let masks: Vec<u8> = lp.iter().map(|&k| face_mask(k, lo, size)).collect();
-                let tri = if lp.len() == 3 {
-                    Some(vec![[0, 1, 2]])
-                } else if lp.len() <= 12 {
-                    triangulate(&pos, &masks)
-                } else {
-                    None
-                };
-                match tri {
-                    Some(t) => tris.extend(t.iter().map(|t| [lp[t[0]], lp[t[1]], lp[t[2]]])),
-                    None => {
-                        let centre = pos.iter().copied().sum::<DVec3>() / pos.len() as f64;
-                        let ck = CENTRE | centres.len() as u64;
-                        centres.push(centre);
-                        for k in 0..lp.len() {
-                            tris.push([ck, lp[k], lp[(k + 1) % lp.len()]]);
-                        }
-                    }
-                }
-            }
-            out.broken |= broken;
-            (out, tris, centres)
+            patch
         })
         .collect();
 
-    let mut keys: Vec<(u64, DVec3)> = results
-        .iter()
-        .flat_map(|r| r.0.verts.iter().copied())
+    let mut keys: Vec<(u64, DVec3)> = patches
+        .par_iter()
+        .flat_map_iter(|p| p.verts.iter().copied())
         .collect();
     keys.par_sort_unstable_by_key(|v| v.0);
     keys.dedup_by_key(|v| v.0);
     let scale = 1.0 / f64::from(1u32 << depth);
     // Centre vertices follow the edge vertices, leaf by leaf.
-    let mut first_centre = Vec::with_capacity(results.len());
+    let mut first_centre = Vec::with_capacity(patches.len());
     let mut next = keys.len() as u32;
-    for (_, _, centres) in &results {
+    for p in &patches {
         first_centre.push(next);
-        next += centres.len() as u32;
+        next += p.centres.len() as u32;
     }
     let mut vertices: Vec<DVec3> = keys.par_iter().map(|v| v.1 * scale).collect();
-    vertices.extend(results.iter().flat_map(|r| r.2.iter().map(|c| *c * scale)));
-    let broken_leaves = results.iter().filter(|r| r.0.broken).count();
-    let faces: Vec<[u32; 3]> = results
+    vertices.extend(
+        patches
+            .iter()
+            .flat_map(|p| p.centres.iter().map(|c| *c * scale)),
+    );
+    let broken_leaves = patches.iter().map(|p| p.broken_leaves).sum();
+    let faces: Vec<[u32; 3]> = patches
         .par_iter()
         .zip(&first_centre)
-        .flat_map_iter(|((_, tris, _), &fc)| {
+        .flat_map_iter(|(p, &fc)| {
             let keys = &keys;
-            tris.iter().map(move |t| {
+            p.tris.iter().map(move |t| {
                 t.map(|k| {
                     if k & CENTRE != 0 {
                         fc + (k & !CENTRE) as u32
@@ -520,6 +465,95 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
         vertices,
         faces,
         broken_leaves,
+    }
+}
+
+impl Ctx<'_> {
+    /// Leaf `ci` of depth `d`: its faces' segments chained into loops and triangulated, appended
+    /// to `patch` (`out` is scratch, empty on entry).
+    fn leaf(&self, d: u32, ci: u32, out: &mut LeafOut, patch: &mut Patch) {
+        let level = &self.levels[d as usize];
+        let c = crate::keys::demorton(level.cells[ci as usize]);
+        let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+        for f in 0..6 {
+            self.face(d, c, f, out);
+        }
+        if out.segs.is_empty() {
+            patch.verts.extend_from_slice(&out.verts);
+            patch.broken_leaves += usize::from(out.broken);
+            return;
+        }
+        // Positions by key (first occurrence; duplicates are identical).
+        out.verts.sort_by_key(|v| v.0);
+        out.verts.dedup_by_key(|v| v.0);
+        let verts = &out.verts;
+        let pos_of = |k: u64| {
+            let i = verts.partition_point(|v| v.0 < k);
+            verts[i].1
+        };
+        let lo = self.finest(d, c);
+        let size = 1u32 << (self.depth - d);
+        let segs = &out.segs;
+        let mut used = vec![false; segs.len()];
+        let mut broken = false;
+        for s0 in 0..segs.len() {
+            if used[s0] {
+                continue;
+            }
+            used[s0] = true;
+            let mut lp = vec![segs[s0].0];
+            let mut cur = segs[s0].1;
+            let mut closed = false;
+            for _ in 0..segs.len() {
+                if cur == lp[0] {
+                    closed = true;
+                    break;
+                }
+                lp.push(cur);
+                match (0..segs.len()).find(|&s| !used[s] && segs[s].0 == cur) {
+                    Some(s) => {
+                        used[s] = true;
+                        cur = segs[s].1;
+                    }
+                    None => break,
+                }
+            }
+            if !closed {
+                broken = true;
+                continue;
+            }
+            if lp.len() < 3 {
+                // Two segments joining the same two vertices on two faces of this cell: the
+                // surface only grazes the cell (an edge whose middle has the other sign). The
+                // patch here has no area; the two cells across those faces each hold the edge
+                // once, with opposite orientations, so nothing is emitted.
+                continue;
+            }
+            let pos: Vec<DVec3> = lp.iter().map(|&k| pos_of(k)).collect();
+            let masks: Vec<u8> = lp.iter().map(|&k| face_mask(k, lo, size)).collect();
+            let tri = if lp.len() == 3 {
+                Some(vec![[0, 1, 2]])
+            } else if lp.len() <= 12 {
+                triangulate(&pos, &masks)
+            } else {
+                None
+            };
+            match tri {
+                Some(t) => patch
+                    .tris
+                    .extend(t.iter().map(|t| [lp[t[0]], lp[t[1]], lp[t[2]]])),
+                None => {
+                    let centre = pos.iter().copied().sum::<DVec3>() / pos.len() as f64;
+                    let ck = CENTRE | patch.centres.len() as u64;
+                    patch.centres.push(centre);
+                    for k in 0..lp.len() {
+                        patch.tris.push([ck, lp[k], lp[(k + 1) % lp.len()]]);
+                    }
+                }
+            }
+        }
+        patch.verts.extend_from_slice(&out.verts);
+        patch.broken_leaves += usize::from(out.broken || broken);
     }
 }
 
