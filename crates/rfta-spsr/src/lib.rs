@@ -473,8 +473,17 @@ fn run(
     let total_w: f64 = samples.iter().map(|s| s.weight).sum();
     let total_a: f64 = samples.iter().map(|s| s.area).sum();
     let alpha = params.screening * total_a / total_w;
-    let v = solve::splat_normals(&levels, &samples);
-    let down = solve::down_pass(&levels, &v);
+    // The normal field's terms and the first pass's systems (no value constraints yet) do not
+    // depend on each other: built side by side.
+    let ((v, down), first_systems) = rayon::join(
+        || {
+            let v = solve::splat_normals(&levels, &samples);
+            let down = solve::down_pass(&levels, &v);
+            (v, down)
+        },
+        || solve::build_systems(&levels, &samples, &[], params, alpha),
+    );
+    let mut first_systems = Some(first_systems);
     // Side points in the cube, with the value of their side.
     let sides: Vec<(glam::DVec3, bool)> = sides
         .iter()
@@ -499,7 +508,10 @@ fn run(
     };
     let (sol, iso) = loop {
         let t1 = Instant::now();
-        let systems = solve::build_systems(&levels, &samples, &constraints, params, alpha);
+        let systems = match first_systems.take() {
+            Some(systems) => systems,
+            None => solve::build_systems(&levels, &samples, &constraints, params, alpha),
+        };
         let last = sides.is_empty() || side_errors.len() == SIDE_PASSES;
         system_time += t1.elapsed();
         let t2 = Instant::now();
