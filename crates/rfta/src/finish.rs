@@ -727,8 +727,8 @@ enum Island {
     /// of the sign its orientation gives its inside, and no sample's sphere that the largest
     /// component leaves a gap at reaches it: nothing witnesses it.
     Small,
-    /// The samples contradict it: every vertex lies inside a sample sphere; or it faces inward
-    /// with no other component around it.
+    /// The samples contradict it: every vertex lies inside a sample sphere and it encloses no
+    /// sample of its inside's sign; or it faces inward with no other component around it.
     Unsupported,
 }
 
@@ -790,34 +790,46 @@ fn judge(
     vertices.dedup();
     let tree = tree.get_or_init(|| SphereTree::new(&unit.spheres));
     let tol = params.tolerance;
+    // A closed component stands for a solid (outward) or a cavity (inward): a sample inside it
+    // of that sign witnesses it, however small it is. Computed at most once.
+    let mut witnessed: Option<bool> = None;
+    let mut encloses_witness = || {
+        *witnessed.get_or_insert_with(|| {
+            unit.samples_within(bounds).into_iter().any(|i| {
+                let p = unit.to_input(unit.centers[i]);
+                let w: f64 = faces
+                    .iter()
+                    .map(|&f| {
+                        let [a, b, c] = mesh.faces[f].map(|v| mesh.vertices[v as usize]);
+                        solid_angle(p, a, b, c)
+                    })
+                    .sum::<f64>()
+                    / (4.0 * std::f64::consts::PI);
+                let v = unit.values[i];
+                (w > 0.5 && v < 0.0) || (w < -0.5 && v > 0.0)
+            })
+        })
+    };
+    // The surface may not enter a sample sphere: a component inside them is not there, unless
+    // it encloses a sample of its inside's sign (a cavity the side re-solves opened around a
+    // sample the first solve enclosed, still inside that sample's sphere: the clearing below
+    // widens it to the sphere).
     if vertices
         .par_iter()
         .all(|&v| tree.inside_any(unit.to_unit(mesh.vertices[v as usize]), -tol, None))
+        && !encloses_witness()
     {
         return Some(Island::Unsupported);
     }
-    // A small closed component stands for a solid (outward) or a cavity (inward): some sample
-    // inside it must say so, however small it is, or some sample's sphere must reach it and no
-    // farther part of the surface: a thin part between the samples, which no sample lies in,
-    // is where the spheres around it touch (without it they would have gaps).
-    if diag < params.min_island * h {
-        let inside = unit.samples_within(bounds).into_iter().any(|i| {
-            let p = unit.to_input(unit.centers[i]);
-            let w: f64 = faces
-                .iter()
-                .map(|&f| {
-                    let [a, b, c] = mesh.faces[f].map(|v| mesh.vertices[v as usize]);
-                    solid_angle(p, a, b, c)
-                })
-                .sum::<f64>()
-                / (4.0 * std::f64::consts::PI);
-            let v = unit.values[i];
-            (w > 0.5 && v < 0.0) || (w < -0.5 && v > 0.0)
-        });
-        // The cheap witness first: a few samples in the box.
-        if !inside && !closes_gap(unit, tree, main, mesh, faces, &vertices) {
-            return Some(Island::Small);
-        }
+    // A small closed component needs a witness: a sample inside it, or some sample's sphere
+    // that reaches it and no farther part of the surface: a thin part between the samples,
+    // which no sample lies in, is where the spheres around it touch (without it they would have
+    // gaps).
+    if diag < params.min_island * h
+        && !encloses_witness()
+        && !closes_gap(unit, tree, main, mesh, faces, &vertices)
+    {
+        return Some(Island::Small);
     }
     None
 }
@@ -1292,6 +1304,16 @@ mod tests {
         assert_eq!(judge_on(&plain, &solid), Some(Island::Unsupported));
         assert_eq!(judge_on(&with_cavity, &cavity), None);
         assert_eq!(judge_on(&plain, &cavity), Some(Island::Unsupported));
+        // A cavity (or solid) a fifth the size of the sample's sphere, around the sample: inside
+        // that sphere, but the sample says it is there, so it stays (the clearing widens it); the
+        // same cavity beside the sample, around none, goes.
+        let mut small_cavity = ball(cavity_c, 0.01);
+        small_cavity.flip();
+        assert_eq!(judge_on(&with_cavity, &small_cavity), None);
+        assert_eq!(judge_on(&with_solid, &ball(solid_c, 0.01)), None);
+        let mut beside = ball(cavity_c + DVec3::new(0.03, 0.0, 0.0), 0.01);
+        beside.flip();
+        assert_eq!(judge_on(&with_cavity, &beside), Some(Island::Unsupported));
         // Size alone removes nothing: a ball a fifth of a spacing across, exactly where a
         // negative sample says there is one, stays; a ball as small that straddles the big ball's
         // surface around no sample goes.
