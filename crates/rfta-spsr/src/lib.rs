@@ -312,7 +312,10 @@ pub const SIDE_RESOLVE_SWEEPS: usize = 2;
 /// weight of those that stay wrong by [`SIDE_WEIGHT_GROWTH`]. This is the screening term with a
 /// target per point, in the spirit of the envelope constraints of Kazhdan, Chuang, Rusinkiewicz
 /// and Hoppe ("Poisson Surface Reconstruction with Envelope Constraints", SGP 2020), applied only
-/// where the plain solution disagrees. Side points outside the reconstruction cube are ignored,
+/// where the plain solution disagrees. A wrong side point whose cell the octree does not refine
+/// to its finest depth gets its cell refined (the octree rebuilt as if a sample were there): a
+/// constraint on coarse depths alone is undone by the finer hats beside it. Side points outside
+/// the reconstruction cube are ignored,
 /// and re-solves whose surface reaches the cube's faces (where it would come out open) are
 /// dropped for the first solve's surface when that one stays inside.
 /// [`SpsrReport::side_errors`] says how many were wrong after each solve whose surface it
@@ -466,7 +469,7 @@ fn run(
         )));
     }
     tree::estimate_density(&mut samples, params, base);
-    let mut levels = tree::build_levels(&samples, depth, base);
+    let mut levels = tree::build_levels(&samples, &[], depth, base);
     let tree_time = t0.elapsed();
 
     let t1 = Instant::now();
@@ -475,7 +478,7 @@ fn run(
     let alpha = params.screening * total_a / total_w;
     // The normal field's terms and the first pass's systems (no value constraints yet) do not
     // depend on each other: built side by side.
-    let ((v, down), first_systems) = rayon::join(
+    let ((mut v, mut down), first_systems) = rayon::join(
         || {
             let v = solve::splat_normals(&levels, &samples);
             let down = solve::down_pass(&levels, &v);
@@ -500,6 +503,11 @@ fn run(
     let mut solve_time = Duration::ZERO;
     // The first solve's solution and iso-value, kept while re-solves run.
     let mut first: Option<(solve::Solution, f64)> = None;
+    // Side points the octree was refined around, and its first version when it was.
+    let mut seeds: Vec<glam::DVec3> = Vec::new();
+    let mut first_levels: Option<Vec<tree::Level>> = None;
+    // Whether the warm start's nodes are those of an octree rebuilt since.
+    let mut stale_nodes = false;
     // A re-solve's start: the previous solve's coefficients on the same nodes.
     let mut resolve: Option<solve::WarmStart> = None;
     let resolve_params = SpsrParams {
@@ -581,11 +589,31 @@ fn run(
         if last || wrong.is_empty() {
             break (sol, iso);
         }
-        // The octree stays: its node index is copied once, the coefficients each pass.
+        // The octree stays (unless refined below): its node index is copied once, the
+        // coefficients each pass.
         let start = resolve.get_or_insert_with(|| solve::WarmStart {
             nodes: levels.iter().map(|l| l.node_index.clone()).collect(),
             x: Vec::new(),
         });
+        if std::mem::take(&mut stale_nodes) {
+            start.nodes = levels.iter().map(|l| l.node_index.clone()).collect();
+        }
+        // A wrong side point in a cell the octree does not refine to its finest depth: its
+        // constraint would act on the depths whose cells hold it, while the finer depths' hats
+        // that reach it (around the finer cells beside it) are solved without it and undo it. The
+        // octree is rebuilt with such points refined as the samples are; the next solve starts
+        // from this one's coefficients on the nodes both octrees share.
+        let finest = &levels[depth as usize];
+        let coarse: Vec<glam::DVec3> = wrong
+            .iter()
+            .map(|&i| sides[i].0)
+            .filter(|&p| {
+                let c = tree::cell_of(p, depth);
+                finest
+                    .cell([i64::from(c[0]), i64::from(c[1]), i64::from(c[2])])
+                    .is_none()
+            })
+            .collect();
         if first.is_none() {
             start.x = sol.x.clone();
             first = Some((sol, iso));
@@ -610,6 +638,19 @@ fn run(
                 }
             }
         }
+        if !coarse.is_empty() {
+            let t = Instant::now();
+            seeds.extend(coarse);
+            let old = std::mem::replace(
+                &mut levels,
+                tree::build_levels(&samples, &seeds, depth, base),
+            );
+            first_levels.get_or_insert(old);
+            v = solve::splat_normals(&levels, &samples);
+            down = solve::down_pass(&levels, &v);
+            stale_nodes = true;
+            system_time += t.elapsed();
+        }
     };
 
     drop((v, down));
@@ -622,17 +663,24 @@ fn run(
     let mut iso = iso;
     // A re-solve that pulls the surface out of the cube (where it would come out open) while the
     // first solve's stayed inside is dropped for the first solve's surface.
+    let mut on_first = false;
     if let Some((sol, first_iso)) = first
         && extract::leaves_cube(&levels, &values, iso)
     {
-        let plain = extract::final_values(&levels, &sol.u);
-        if !extract::leaves_cube(&levels, &plain, first_iso) {
+        let lv = first_levels.as_deref().unwrap_or(&levels);
+        let plain = extract::final_values(lv, &sol.u);
+        if !extract::leaves_cube(lv, &plain, first_iso) {
             values = plain;
             iso = first_iso;
             side_errors.truncate(1);
+            on_first = true;
         }
     }
-    let mut ex = extract::extract(&levels, &values, iso);
+    let surface_levels = match &first_levels {
+        Some(lv) if on_first => lv,
+        _ => &levels,
+    };
+    let mut ex = extract::extract(surface_levels, &values, iso);
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });
     }

@@ -984,7 +984,7 @@ mod tests {
         let frame = tree::Frame::around(&points, params.box_scale)?;
         let mut samples = tree::merge(&points, &frame, params.depth);
         tree::estimate_density(&mut samples, &params, base);
-        let levels = tree::build_levels(&samples, params.depth, base);
+        let levels = tree::build_levels(&samples, &[], params.depth, base);
         Ok((points, frame, levels, base))
     }
 

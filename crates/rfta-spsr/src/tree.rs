@@ -261,17 +261,26 @@ fn sort_dedup(v: &mut Vec<u64>) {
 /// parents of the block around every refined cell one depth finer (so every hat one depth
 /// coarser than an active hat, and overlapping it, is active too: the prolongation and the
 /// parent-child coupling stay exact). Depths up to `base` are complete grids; deeper cells are
-/// the children of refined ones, in broods of eight.
-pub(crate) fn build_levels(samples: &[Sample], depth: u32, base: u32) -> Vec<Level> {
+/// the children of refined ones, in broods of eight. `seeds` (unit cube) are refined as samples
+/// whose top depth is `depth`.
+pub(crate) fn build_levels(
+    samples: &[Sample],
+    seeds: &[DVec3],
+    depth: u32,
+    base: u32,
+) -> Vec<Level> {
     let base = base.min(depth);
     let mut refined: Vec<Vec<u64>> = vec![Vec::new(); depth as usize + 1];
-    // Marks from samples.
-    for s in samples {
-        let top = (s.depth.ceil() as u32).clamp(base, depth);
+    // Marks from samples and seeds.
+    let tops = samples
+        .iter()
+        .map(|s| (s.pos, (s.depth.ceil() as u32).clamp(base, depth)))
+        .chain(seeds.iter().map(|&p| (p, depth)));
+    for (pos, top) in tops {
         if top == 0 || top <= base {
             continue;
         }
-        let c = cell_of(s.pos, top);
+        let c = cell_of(pos, top);
         parent_block(c, 1 << top, &mut refined[top as usize - 1]);
     }
     for d in (base..depth).rev() {
