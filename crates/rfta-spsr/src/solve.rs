@@ -998,6 +998,54 @@ mod tests {
         }
     }
 
+    /// A seed is refined to the finest depth as a sample there would be: its finest cell and the
+    /// 3x3x3 block of cells around it exist (the block's parents are refined), the depths above
+    /// stay graded (every finer cell's parent is a cell), and every cell of the tree without the
+    /// seed is still there.
+    #[test]
+    fn a_seed_is_refined_to_the_finest_depth() -> Result<(), Box<dyn std::error::Error>> {
+        let (points, frame, plain, base) = thin_tree()?;
+        let depth = plain.len() as u32 - 1;
+        let params = SpsrParams {
+            depth,
+            box_scale: 3.0,
+            ..SpsrParams::default()
+        };
+        let mut samples = tree::merge(&points, &frame, depth);
+        tree::estimate_density(&mut samples, &params, base);
+        // Far from the samples (a sphere of radius 0.2 around 0.3 in the points' frame).
+        let seed = DVec3::new(0.81, 0.77, 0.79);
+        let at = |levels: &[Level], d: u32, c: [u32; 3]| {
+            levels[d as usize].cell([i64::from(c[0]), i64::from(c[1]), i64::from(c[2])])
+        };
+        let c = cell_of(seed, depth);
+        assert!(
+            at(&plain, depth, c).is_none(),
+            "the plain tree reaches the seed"
+        );
+        let seeded = tree::build_levels(&samples, &[seed], depth, base);
+        for o in 0..27u32 {
+            let q = [c[0] + o % 3 - 1, c[1] + (o / 3) % 3 - 1, c[2] + o / 9 - 1];
+            assert!(at(&seeded, depth, q).is_some(), "cell {q:?} of the block");
+        }
+        for d in 1..=depth as usize {
+            for &k in &seeded[d].cells {
+                let p = crate::keys::demorton(k >> 3);
+                assert!(
+                    at(&seeded, d as u32 - 1, p).is_some(),
+                    "parent of a depth-{d} cell"
+                );
+            }
+            for &k in &plain[d].cells {
+                assert!(
+                    seeded[d].cells.binary_search(&k).is_ok(),
+                    "lost a depth-{d} cell"
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// The parallel restriction (each coarse node gathering) equals, bit for bit, scattering the
     /// fine nodes in order to their prolongation parents, at every depth.
     #[test]
