@@ -98,12 +98,19 @@ impl Ctx<'_> {
     }
 }
 
-/// Segments and vertices gathered for one leaf.
+/// Segments and vertices gathered for one leaf, and the space in which [`Ctx::leaf`] chains
+/// them into loops (kept from leaf to leaf: one allocation per task, not per leaf).
 #[derive(Default)]
 struct LeafOut {
     verts: Vec<(u64, DVec3)>,
     segs: Vec<(u64, u64)>,
     broken: bool,
+    /// Per segment, whether a loop holds it.
+    used: Vec<bool>,
+    /// The loop being chained: its vertex keys, positions and face masks.
+    lp: Vec<u64>,
+    pos: Vec<DVec3>,
+    masks: Vec<u8>,
 }
 
 /// What one task of [`extract`] gathers from its leaves, in leaf order: each leaf's vertices
@@ -415,9 +422,6 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
             let mut patch = Patch::default();
             let mut out = LeafOut::default();
             for &(d, ci) in leaves {
-                out.verts.clear();
-                out.segs.clear();
-                out.broken = false;
                 ctx.leaf(d, ci, &mut out, &mut patch);
             }
             patch
@@ -470,8 +474,11 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
 
 impl Ctx<'_> {
     /// Leaf `ci` of depth `d`: its faces' segments chained into loops and triangulated, appended
-    /// to `patch` (`out` is scratch, empty on entry).
+    /// to `patch` (`out`: scratch space, whatever it held before).
     fn leaf(&self, d: u32, ci: u32, out: &mut LeafOut, patch: &mut Patch) {
+        out.verts.clear();
+        out.segs.clear();
+        out.broken = false;
         let level = &self.levels[d as usize];
         let c = crate::keys::demorton(level.cells[ci as usize]);
         let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
@@ -486,22 +493,30 @@ impl Ctx<'_> {
         // Positions by key (first occurrence; duplicates are identical).
         out.verts.sort_by_key(|v| v.0);
         out.verts.dedup_by_key(|v| v.0);
-        let verts = &out.verts;
+        let LeafOut {
+            verts,
+            segs,
+            broken,
+            used,
+            lp,
+            pos,
+            masks,
+        } = out;
         let pos_of = |k: u64| {
             let i = verts.partition_point(|v| v.0 < k);
             verts[i].1
         };
         let lo = self.finest(d, c);
         let size = 1u32 << (self.depth - d);
-        let segs = &out.segs;
-        let mut used = vec![false; segs.len()];
-        let mut broken = false;
+        used.clear();
+        used.resize(segs.len(), false);
         for s0 in 0..segs.len() {
             if used[s0] {
                 continue;
             }
             used[s0] = true;
-            let mut lp = vec![segs[s0].0];
+            lp.clear();
+            lp.push(segs[s0].0);
             let mut cur = segs[s0].1;
             let mut closed = false;
             for _ in 0..segs.len() {
@@ -519,7 +534,7 @@ impl Ctx<'_> {
                 }
             }
             if !closed {
-                broken = true;
+                *broken = true;
                 continue;
             }
             if lp.len() < 3 {
@@ -529,12 +544,16 @@ impl Ctx<'_> {
                 // once, with opposite orientations, so nothing is emitted.
                 continue;
             }
-            let pos: Vec<DVec3> = lp.iter().map(|&k| pos_of(k)).collect();
-            let masks: Vec<u8> = lp.iter().map(|&k| face_mask(k, lo, size)).collect();
-            let tri = if lp.len() == 3 {
-                Some(vec![[0, 1, 2]])
-            } else if lp.len() <= 12 {
-                triangulate(&pos, &masks)
+            if lp.len() == 3 {
+                patch.tris.push([lp[0], lp[1], lp[2]]);
+                continue;
+            }
+            pos.clear();
+            pos.extend(lp.iter().map(|&k| pos_of(k)));
+            masks.clear();
+            masks.extend(lp.iter().map(|&k| face_mask(k, lo, size)));
+            let tri = if lp.len() <= 12 {
+                triangulate(pos, masks)
             } else {
                 None
             };
@@ -552,8 +571,8 @@ impl Ctx<'_> {
                 }
             }
         }
-        patch.verts.extend_from_slice(&out.verts);
-        patch.broken_leaves += usize::from(out.broken || broken);
+        patch.verts.extend_from_slice(verts);
+        patch.broken_leaves += usize::from(*broken);
     }
 }
 
