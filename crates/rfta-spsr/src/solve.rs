@@ -964,6 +964,20 @@ mod tests {
     #[allow(clippy::type_complexity)]
     fn thin_tree()
     -> Result<(OrientedPoints, tree::Frame, Vec<Level>, u32), Box<dyn std::error::Error>> {
+        let (points, frame, samples, base) = thin_samples()?;
+        let levels = tree::build_levels(&samples, &[], THIN_DEPTH, base);
+        Ok((points, frame, levels, base))
+    }
+
+    /// The depth of [`thin_tree`].
+    const THIN_DEPTH: u32 = 7;
+
+    /// The points of [`thin_tree`], their frame, merged samples (densities estimated) and the
+    /// base depth.
+    #[allow(clippy::type_complexity)]
+    fn thin_samples()
+    -> Result<(OrientedPoints, tree::Frame, Vec<tree::Sample>, u32), Box<dyn std::error::Error>>
+    {
         let n = 4000;
         let dirs: Vec<DVec3> = (0..n)
             .map(|i| {
@@ -976,7 +990,7 @@ mod tests {
         let pos: Vec<DVec3> = dirs.iter().map(|d| 0.2 * *d + DVec3::splat(0.3)).collect();
         let points = OrientedPoints::new(pos, dirs, None)?;
         let params = SpsrParams {
-            depth: 7,
+            depth: THIN_DEPTH,
             box_scale: 3.0,
             ..SpsrParams::default()
         };
@@ -984,8 +998,7 @@ mod tests {
         let frame = tree::Frame::around(&points, params.box_scale)?;
         let mut samples = tree::merge(&points, &frame, params.depth);
         tree::estimate_density(&mut samples, &params, base);
-        let levels = tree::build_levels(&samples, &[], params.depth, base);
-        Ok((points, frame, levels, base))
+        Ok((points, frame, samples, base))
     }
 
     /// A fixed pseudo-random sequence in [-1/2, 1/2).
@@ -1004,15 +1017,9 @@ mod tests {
     /// seed is still there.
     #[test]
     fn a_seed_is_refined_to_the_finest_depth() -> Result<(), Box<dyn std::error::Error>> {
-        let (points, frame, plain, base) = thin_tree()?;
-        let depth = plain.len() as u32 - 1;
-        let params = SpsrParams {
-            depth,
-            box_scale: 3.0,
-            ..SpsrParams::default()
-        };
-        let mut samples = tree::merge(&points, &frame, depth);
-        tree::estimate_density(&mut samples, &params, base);
+        let (_, _, samples, base) = thin_samples()?;
+        let depth = THIN_DEPTH;
+        let plain = tree::build_levels(&samples, &[], depth, base);
         // Far from the samples (a sphere of radius 0.2 around 0.3 in the points' frame).
         let seed = DVec3::new(0.81, 0.77, 0.79);
         let at = |levels: &[Level], d: u32, c: [u32; 3]| {

@@ -575,7 +575,7 @@ impl Scaling {
 /// The ceiling's workload: 64 equal tasks, each 2,000 passes of arithmetic over a private
 /// 32 KiB buffer (in a core's own cache), handed out one at a time, so nothing is serial,
 /// shared or unbalanced: what 2 threads gain over 1 on it is what this machine gives at that
-/// moment (about 0.8 s on one thread of the project's VM). Returns a checksum, so that the work
+/// moment (about 0.55 s on one thread of the project's VM). Returns a checksum, so that the work
 /// is not optimized away.
 fn ceiling_work() -> f64 {
     use rayon::prelude::*;
