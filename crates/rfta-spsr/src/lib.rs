@@ -470,7 +470,7 @@ fn run(
     }
     tree::estimate_density(&mut samples, params, base);
     let mut levels = tree::build_levels(&samples, &[], depth, base);
-    let tree_time = t0.elapsed();
+    let mut tree_time = t0.elapsed();
 
     let t1 = Instant::now();
     let total_w: f64 = samples.iter().map(|s| s.weight).sum();
@@ -646,6 +646,8 @@ fn run(
                 tree::build_levels(&samples, &seeds, depth, base),
             );
             first_levels.get_or_insert(old);
+            tree_time += t.elapsed();
+            let t = Instant::now();
             v = solve::splat_normals(&levels, &samples);
             down = solve::down_pass(&levels, &v);
             stale_nodes = true;
