@@ -1,8 +1,7 @@
 //! Combinatorial checks of a triangle mesh: boundary and non-manifold edges, non-manifold
 //! vertices, orientation, connected components, Euler characteristic and genus.
 
-use std::collections::HashMap;
-
+use rayon::prelude::*;
 use rfta_geom::TriMesh;
 
 use crate::UnionFind;
@@ -35,13 +34,17 @@ pub struct Topology {
 
 impl Topology {
     /// Analyses `mesh`.
+    ///
+    /// The faces' directed edges are sorted by their undirected edge, so that each edge's uses
+    /// are a run: its count, the direction balance and the first two faces (in face order) come
+    /// from the run. Corners joined across an edge form the fans around each vertex; faces
+    /// sharing a vertex form the components.
     pub fn of(mesh: &TriMesh) -> Self {
         let n_faces = mesh.n_faces();
-        let mut used = vec![false; mesh.n_vertices()];
+        let n_all = mesh.n_vertices();
+        let mut used = vec![false; n_all];
         let mut degenerate_faces = 0;
-        // Undirected edge -> (count, faces seen (first two), direction of first, direction balance).
-        let mut edges: HashMap<(u32, u32), EdgeUse> = HashMap::with_capacity(n_faces * 3 / 2 + 1);
-        for (fi, f) in mesh.faces.iter().enumerate() {
+        for f in &mesh.faces {
             for &v in f {
                 if let Some(u) = used.get_mut(v as usize) {
                     *u = true;
@@ -50,38 +53,47 @@ impl Topology {
             if f[0] == f[1] || f[1] == f[2] || f[2] == f[0] {
                 degenerate_faces += 1;
             }
-            for k in 0..3 {
-                let (a, b) = (f[k], f[(k + 1) % 3]);
-                if a == b {
-                    continue;
-                }
-                let e = edges.entry((a.min(b), a.max(b))).or_default();
-                e.count += 1;
-                e.forward += i32::from(a < b);
-                if e.faces.len() < 2 {
-                    e.faces.push(fi as u32);
-                }
-            }
         }
         let n_vertices = used.iter().filter(|&&u| u).count();
+        // (undirected edge, corner of its first vertex): sorted, each edge's uses follow in
+        // face order.
+        let mut uses: Vec<(u64, u32)> = mesh
+            .faces
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(fi, f)| {
+                (0..3).filter_map(move |k| {
+                    let (a, b) = (f[k], f[(k + 1) % 3]);
+                    let key = u64::from(a.min(b)) << 32 | u64::from(a.max(b));
+                    (a != b).then_some((key, (fi * 3 + k) as u32))
+                })
+            })
+            .collect();
+        uses.par_sort_unstable();
+        let mut n_edges = 0;
         let mut boundary_edges = 0;
         let mut nonmanifold_edges = 0;
         let mut misoriented_edges = 0;
-        // Union-find over corners (face, slot) to count fans per vertex, and over faces for components.
+        // Union-find over corners (face, slot) to count fans per vertex, and over faces for
+        // components.
         let mut corners = UnionFind::new(n_faces * 3);
         let mut comps = UnionFind::new(n_faces);
-        let slot = |face: u32, v: u32| -> usize {
-            let f = mesh.faces[face as usize];
-            face as usize * 3 + f.iter().position(|&x| x == v).unwrap_or(0)
+        let slot = |face: usize, v: u32| -> usize {
+            let f = mesh.faces[face];
+            face * 3 + f.iter().position(|&x| x == v).unwrap_or(0)
         };
-        for (&(a, b), e) in &edges {
-            match e.count {
-                1 => boundary_edges += 1,
-                2 => {
-                    if e.forward != 1 {
+        for run in uses.chunk_by(|x, y| x.0 == y.0) {
+            n_edges += 1;
+            match run {
+                [_] => boundary_edges += 1,
+                [(key, c1), (_, c2)] => {
+                    let (a, b) = ((key >> 32) as u32, *key as u32);
+                    let (f1, f2) = (*c1 as usize / 3, *c2 as usize / 3);
+                    // Whether each use goes from `a` to `b`.
+                    let forward = |c: u32| mesh.faces[c as usize / 3][c as usize % 3] == a;
+                    if forward(*c1) == forward(*c2) {
                         misoriented_edges += 1;
                     }
-                    let (f1, f2) = (e.faces[0], e.faces[1]);
                     corners.union(slot(f1, a), slot(f2, a));
                     corners.union(slot(f1, b), slot(f2, b));
                 }
@@ -89,7 +101,7 @@ impl Topology {
             }
         }
         // Faces sharing a vertex are in one component.
-        let mut first_face_of_vertex = vec![u32::MAX; mesh.n_vertices()];
+        let mut first_face_of_vertex = vec![u32::MAX; n_all];
         for (fi, f) in mesh.faces.iter().enumerate() {
             for &v in f {
                 let Some(slot) = first_face_of_vertex.get_mut(v as usize) else {
@@ -104,20 +116,24 @@ impl Topology {
         }
         let components = (0..n_faces).filter(|&f| comps.find(f) == f).count();
         // A vertex is non-manifold if its corners form more than one fan.
-        let mut fans_per_vertex: HashMap<u32, usize> = HashMap::new();
+        let mut fans_per_vertex = vec![0u32; n_all];
         for (fi, f) in mesh.faces.iter().enumerate() {
             for (k, &v) in f.iter().enumerate() {
                 let c = fi * 3 + k;
-                // Count each fan once, at its root corner (duplicated vertices in a face counted once).
-                if corners.find(c) == c && f.iter().position(|&x| x == v) == Some(k) {
-                    *fans_per_vertex.entry(v).or_default() += 1;
+                // Count each fan once, at its root corner (duplicated vertices in a face counted
+                // once).
+                if corners.find(c) == c
+                    && f.iter().position(|&x| x == v) == Some(k)
+                    && let Some(n) = fans_per_vertex.get_mut(v as usize)
+                {
+                    *n += 1;
                 }
             }
         }
-        let nonmanifold_vertices = fans_per_vertex.values().filter(|&&n| n > 1).count();
+        let nonmanifold_vertices = fans_per_vertex.iter().filter(|&&n| n > 1).count();
         Self {
             n_vertices,
-            n_edges: edges.len(),
+            n_edges,
             n_faces,
             degenerate_faces,
             boundary_edges,
@@ -157,11 +173,4 @@ impl Topology {
         let twice = 2 * self.components as i64 - self.euler_characteristic();
         (twice % 2 == 0).then_some(twice / 2)
     }
-}
-
-#[derive(Default)]
-struct EdgeUse {
-    count: u32,
-    forward: i32,
-    faces: Vec<u32>,
 }
