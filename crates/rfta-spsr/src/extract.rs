@@ -111,6 +111,9 @@ struct LeafOut {
     lp: Vec<u64>,
     pos: Vec<DVec3>,
     masks: Vec<u8>,
+    /// The loop's triangles (corner indices) and [`triangulate`]'s stack of spans.
+    tris: Vec<[usize; 3]>,
+    spans: Vec<(usize, usize)>,
 }
 
 /// What one task of [`extract`] gathers from its leaves, in leaf order: each leaf's vertices
@@ -247,14 +250,27 @@ fn face_mask(key: u64, lo: P, size: u32) -> u8 {
     m
 }
 
-/// Minimal-area triangulation of a loop whose diagonals may not join two vertices on a common
-/// face of the cell; `None` when no such triangulation exists.
-fn triangulate(pos: &[DVec3], masks: &[u8]) -> Option<Vec<[usize; 3]>> {
+/// Longest loop [`triangulate`] takes; a longer one gets a fan around its centre.
+const MAX_LOOP: usize = 12;
+
+/// Minimal-area triangulation of a loop of at most [`MAX_LOOP`] vertices whose diagonals may not
+/// join two vertices on a common face of the cell, into `tris` (corner indices; `spans`: scratch
+/// space); `false` when no such triangulation exists. No allocation once the scratch has grown:
+/// the extraction calls this for most leaves of every solve, on every thread.
+fn triangulate(
+    pos: &[DVec3],
+    masks: &[u8],
+    tris: &mut Vec<[usize; 3]>,
+    spans: &mut Vec<(usize, usize)>,
+) -> bool {
     let n = pos.len();
+    if n > MAX_LOOP {
+        return false;
+    }
     let allowed =
         |i: usize, j: usize| j == i + 1 || (i == 0 && j == n - 1) || masks[i] & masks[j] == 0;
-    let mut cost = vec![f64::INFINITY; n * n];
-    let mut pick = vec![usize::MAX; n * n];
+    let mut cost = [f64::INFINITY; MAX_LOOP * MAX_LOOP];
+    let mut pick = [usize::MAX; MAX_LOOP * MAX_LOOP];
     for i in 0..n - 1 {
         cost[i * n + i + 1] = 0.0;
     }
@@ -279,20 +295,21 @@ fn triangulate(pos: &[DVec3], masks: &[u8]) -> Option<Vec<[usize; 3]>> {
         }
     }
     if !cost[n - 1].is_finite() {
-        return None;
+        return false;
     }
-    let mut tris = Vec::with_capacity(n - 2);
-    let mut stack = vec![(0usize, n - 1)];
-    while let Some((i, j)) = stack.pop() {
+    tris.clear();
+    spans.clear();
+    spans.push((0, n - 1));
+    while let Some((i, j)) = spans.pop() {
         if j <= i + 1 {
             continue;
         }
         let k = pick[i * n + j];
         tris.push([i, k, j]);
-        stack.push((i, k));
-        stack.push((k, j));
+        spans.push((i, k));
+        spans.push((k, j));
     }
-    Some(tris)
+    true
 }
 
 /// Result of the extraction, in unit-cube coordinates.
@@ -369,16 +386,19 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
                 .into_par_iter()
                 .with_min_len(crate::solve::GRAIN)
                 .flat_map_iter(move |ci| {
-                    let mut out = Vec::new();
+                    // The cell and at most the 18 coarser leaves beside its faces and edges.
+                    let mut out = [(0u32, 0u32); 19];
+                    let mut len = 0;
                     let corners = &level.corners[ci];
-                    if level.refined[ci] {
-                        return out;
+                    let cut = !level.refined[ci] && {
+                        let first = inside(vals[corners[0] as usize]);
+                        corners.iter().any(|&k| inside(vals[k as usize]) != first)
+                    };
+                    if !cut {
+                        return out.into_iter().take(len);
                     }
-                    let first = inside(vals[corners[0] as usize]);
-                    if corners.iter().all(|&k| inside(vals[k as usize]) == first) {
-                        return out;
-                    }
-                    out.push((d, ci as u32));
+                    out[len] = (d, ci as u32);
+                    len += 1;
                     let c = crate::keys::demorton(level.cells[ci]);
                     let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
                     let n = 1i64 << d;
@@ -401,12 +421,13 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
                             dd -= 1;
                             k = k.map(|v| v >> 1);
                             if let Some(i) = levels[dd as usize].cell(k) {
-                                out.push((dd, i));
+                                out[len] = (dd, i);
+                                len += 1;
                                 break;
                             }
                         }
                     }
-                    out
+                    out.into_iter().take(len)
                 })
         })
         .collect();
@@ -419,8 +440,19 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
     let patches: Vec<Patch> = cand
         .par_chunks(LEAVES_PER_TASK)
         .map(|leaves| {
-            let mut patch = Patch::default();
-            let mut out = LeafOut::default();
+            // Room for what a leaf typically gives (a loop or two of 3 to 6 vertices), so that
+            // the vectors seldom grow: growing them on two threads at once is where the
+            // allocator's locks were contended.
+            let mut patch = Patch {
+                verts: Vec::with_capacity(8 * leaves.len()),
+                tris: Vec::with_capacity(6 * leaves.len()),
+                ..Patch::default()
+            };
+            let mut out = LeafOut {
+                verts: Vec::with_capacity(32),
+                segs: Vec::with_capacity(16),
+                ..LeafOut::default()
+            };
             for &(d, ci) in leaves {
                 ctx.leaf(d, ci, &mut out, &mut patch);
             }
@@ -501,6 +533,8 @@ impl Ctx<'_> {
             lp,
             pos,
             masks,
+            tris,
+            spans,
         } = out;
         let pos_of = |k: u64| {
             let i = verts.partition_point(|v| v.0 < k);
@@ -552,22 +586,16 @@ impl Ctx<'_> {
             pos.extend(lp.iter().map(|&k| pos_of(k)));
             masks.clear();
             masks.extend(lp.iter().map(|&k| face_mask(k, lo, size)));
-            let tri = if lp.len() <= 12 {
-                triangulate(pos, masks)
-            } else {
-                None
-            };
-            match tri {
-                Some(t) => patch
+            if triangulate(pos, masks, tris, spans) {
+                patch
                     .tris
-                    .extend(t.iter().map(|t| [lp[t[0]], lp[t[1]], lp[t[2]]])),
-                None => {
-                    let centre = pos.iter().copied().sum::<DVec3>() / pos.len() as f64;
-                    let ck = CENTRE | patch.centres.len() as u64;
-                    patch.centres.push(centre);
-                    for k in 0..lp.len() {
-                        patch.tris.push([ck, lp[k], lp[(k + 1) % lp.len()]]);
-                    }
+                    .extend(tris.iter().map(|t| [lp[t[0]], lp[t[1]], lp[t[2]]]));
+            } else {
+                let centre = pos.iter().copied().sum::<DVec3>() / pos.len() as f64;
+                let ck = CENTRE | patch.centres.len() as u64;
+                patch.centres.push(centre);
+                for k in 0..lp.len() {
+                    patch.tris.push([ck, lp[k], lp[(k + 1) % lp.len()]]);
                 }
             }
         }

@@ -221,29 +221,31 @@ pub(crate) fn build_systems(
 /// 27 neighbour node indices per node (`NONE` when absent), in [`offset`] order. Built for one
 /// depth at a time and dropped after use: it is the largest per-node array.
 pub(crate) fn neighbor_table(level: &Level) -> Vec<u32> {
-    let mut out = vec![NONE; level.nodes.len() * 27];
-    out.par_chunks_mut(27)
+    // Collected into place: no serial fill of the table first.
+    level
+        .nodes
+        .par_iter()
         .with_min_len(GRAIN)
-        .zip(&level.nodes)
-        .for_each(|(o, &c)| o.copy_from_slice(&level.node_index.block27(ic(c))));
-    out
+        .map(|&c| level.node_index.block27(ic(c)))
+        .collect::<Vec<[u32; 27]>>()
+        .into_flattened()
 }
 
 /// 27 node indices one depth coarser per node: hat `(c >> 1) + o - 1` per axis.
 pub(crate) fn parent_table(fine: &Level, coarse: &Level) -> Vec<u32> {
-    let mut out = vec![NONE; fine.nodes.len() * 27];
-    out.par_chunks_mut(27)
+    fine.nodes
+        .par_iter()
         .with_min_len(GRAIN)
-        .zip(&fine.nodes)
-        .for_each(|(o, &c)| {
+        .map(|&c| {
             let p = [
                 i64::from(c[0] >> 1),
                 i64::from(c[1] >> 1),
                 i64::from(c[2] >> 1),
             ];
-            o.copy_from_slice(&coarse.node_index.block27(p));
-        });
-    out
+            coarse.node_index.block27(p)
+        })
+        .collect::<Vec<[u32; 27]>>()
+        .into_flattened()
 }
 
 /// Splat the (inward) normal field: each sample's area-weighted normal goes to the hats of the two
