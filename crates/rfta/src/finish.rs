@@ -26,6 +26,7 @@ pub(crate) fn finish(
     progress(Stage::Final);
     let cloud = rounds.cloud;
     report.points_per_round.push(cloud.len());
+    crate::pool::waiters_back();
     let t = Instant::now();
     let sides = unit.sides();
     let solved = crate::rounds::solve(&cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
@@ -45,6 +46,7 @@ pub(crate) fn finish(
     if let Some(all) = rounds.all {
         let _ = tree.set(all);
     }
+    crate::pool::waiters_back();
     let t = Instant::now();
     // The largest component in the unit box and the whole mesh, indexed on first use.
     let (main, whole) = (OnceLock::new(), OnceLock::new());
@@ -68,6 +70,7 @@ pub(crate) fn finish(
     report
         .timings
         .push(("components judged".into(), t.elapsed()));
+    crate::pool::waiters_back();
     let t = Instant::now();
     // First radially out of the spheres that own points (near the surface and small, so the
     // tree prunes well), then out of every sphere up to CLEAR_BELOW owner radii, along the normal
@@ -96,6 +99,7 @@ pub(crate) fn finish(
         + report.vertices_added;
     report.dents += dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
+    crate::pool::waiters_back();
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(&mesh);
     report.mesh = check::mesh(&mesh, &topology)?;

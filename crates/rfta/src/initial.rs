@@ -67,6 +67,7 @@ fn drawing(
         let c: Vec<DVec3> = draw.iter().map(|&i| unit.centers[i]).collect();
         let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
         let raster = params.raster_params(res, negative);
+        crate::pool::waiters_back();
         let t_raster = Instant::now();
         let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
         if draw.len() < set.len() {
@@ -83,6 +84,7 @@ fn drawing(
             Seeds(params.seed).initial_batch(negative),
         );
         let tree = SphereTree::with_indices(&unit.spheres, &batch);
+        crate::pool::waiters_back();
         parts.push(counted(set.len(), progress, |done| {
             rfta_feasible::initial_points_counted(
                 &unit.spheres,

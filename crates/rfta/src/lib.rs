@@ -51,6 +51,7 @@ mod memory;
 mod normalize;
 mod params;
 pub mod plane;
+mod pool;
 mod report;
 mod rounds;
 
@@ -185,27 +186,7 @@ pub fn reconstruct_cancellable(
 ) -> Result<Reconstruction> {
     params.validate()?;
     check_memory(samples.len(), params)?;
-    on_pool(params.threads, || run(samples, params, progress, cancel))
-}
-
-/// Runs `work` on `threads` workers (`None`: on a worker of the global pool, where the caller
-/// is not on one already: each parallel loop then forks from inside the pool instead of being
-/// injected into it).
-pub(crate) fn on_pool<T: Send>(
-    threads: Option<usize>,
-    work: impl FnOnce() -> Result<T> + Send,
-) -> Result<T> {
-    match threads {
-        None => rayon::scope(|_| work()),
-        Some(t) => rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| Error::ThreadPool {
-                threads: t,
-                reason: e.to_string(),
-            })?
-            .install(work),
-    }
+    pool::on_pool(params.threads, || run(samples, params, progress, cancel))
 }
 
 /// The six steps.

@@ -82,7 +82,7 @@ pub struct Reconstruction2 {
 /// curve needs, [`Error::TooFewPoints`], [`Error::ThreadPool`].
 pub fn reconstruct(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     params.validate()?;
-    crate::on_pool(params.threads, || run(samples, params))
+    crate::pool::on_pool(params.threads, || run(samples, params))
 }
 
 fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {

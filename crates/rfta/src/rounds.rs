@@ -63,6 +63,7 @@ impl Rounds {
                 of: params.rounds,
             });
             report.points_per_round.push(self.cloud.len());
+            crate::pool::waiters_back();
             let t = Instant::now();
             let batch;
             let tree = match &self.all {
@@ -88,6 +89,7 @@ impl Rounds {
             report
                 .timings
                 .push((format!("round {round}: screened Poisson"), t.elapsed()));
+            crate::pool::waiters_back();
             let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
             // tested against this same set last round.
