@@ -324,48 +324,11 @@ pub(crate) fn build_levels(
 }
 
 fn make_level(depth: u32, cells: Vec<u64>, refined: Vec<bool>) -> Level {
-    let cell_index = SparseIndex::new(cells.iter().map(|&k| demorton(k)), 1 << depth, cells.len());
-    // Corner nodes, sorted by (colour, Morton). Cells come in broods of eight (Morton-sorted, so
-    // each brood is contiguous), whose 27 distinct corners are listed once.
-    let key_of = |nc: [u32; 3]| (color(nc) << 60) | morton(nc);
-    let mut keys: Vec<u64> = if cells.len().is_multiple_of(8)
-        && cells
-            .chunks(8)
-            .all(|b| b[0].is_multiple_of(8) && b[7] == b[0] + 7)
-    {
-        let mut keys = vec![0u64; cells.len() / 8 * 27];
-        keys.par_chunks_mut(27)
-            .zip(cells.par_chunks(8))
-            .for_each(|(out, brood)| {
-                let c = demorton(brood[0]);
-                for (q, k) in out.iter_mut().enumerate() {
-                    let o = [(q % 3) as u32, ((q / 3) % 3) as u32, (q / 9) as u32];
-                    *k = key_of([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
-                }
-            });
-        keys
-    } else {
-        let mut keys = vec![0u64; cells.len() * 8];
-        keys.par_chunks_mut(8).zip(&cells).for_each(|(out, &k)| {
-            let c = demorton(k);
-            for (q, key) in out.iter_mut().enumerate() {
-                let o = corner(q);
-                *key = key_of([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
-            }
-        });
-        keys
-    };
-    sort_dedup(&mut keys);
-    let mask = (1u64 << 60) - 1;
-    let nodes: Vec<[u32; 3]> = keys.par_iter().map(|&k| demorton(k & mask)).collect();
-    let mut colors = [0usize; 9];
-    for &k in &keys {
-        colors[(k >> 60) as usize + 1] += 1;
-    }
-    for c in 0..8 {
-        colors[c + 1] += colors[c];
-    }
-    let node_index = SparseIndex::new(nodes.iter().copied(), (1 << depth) + 1, nodes.len());
+    // The cells' index (a serial pass) is built beside the nodes.
+    let (cell_index, (nodes, node_index, colors)) = rayon::join(
+        || SparseIndex::new(cells.iter().map(|&k| demorton(k)), 1 << depth, cells.len()),
+        || level_nodes(depth, &cells),
+    );
     let corners: Vec<[u32; 8]> = cells
         .par_iter()
         .map(|&k| {
@@ -393,4 +356,51 @@ fn make_level(depth: u32, cells: Vec<u64>, refined: Vec<bool>) -> Level {
         node_index,
         colors,
     }
+}
+
+/// The corner nodes of a depth's `cells`, sorted by (colour, Morton), their index and the
+/// colours' starts.
+fn level_nodes(depth: u32, cells: &[u64]) -> (Vec<[u32; 3]>, SparseIndex, [usize; 9]) {
+    // Corner nodes, sorted by (colour, Morton). Cells come in broods of eight (Morton-sorted, so
+    // each brood is contiguous), whose 27 distinct corners are listed once.
+    let key_of = |nc: [u32; 3]| (color(nc) << 60) | morton(nc);
+    let mut keys: Vec<u64> = if cells.len().is_multiple_of(8)
+        && cells
+            .chunks(8)
+            .all(|b| b[0].is_multiple_of(8) && b[7] == b[0] + 7)
+    {
+        let mut keys = vec![0u64; cells.len() / 8 * 27];
+        keys.par_chunks_mut(27)
+            .zip(cells.par_chunks(8))
+            .for_each(|(out, brood)| {
+                let c = demorton(brood[0]);
+                for (q, k) in out.iter_mut().enumerate() {
+                    let o = [(q % 3) as u32, ((q / 3) % 3) as u32, (q / 9) as u32];
+                    *k = key_of([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
+                }
+            });
+        keys
+    } else {
+        let mut keys = vec![0u64; cells.len() * 8];
+        keys.par_chunks_mut(8).zip(cells).for_each(|(out, &k)| {
+            let c = demorton(k);
+            for (q, key) in out.iter_mut().enumerate() {
+                let o = corner(q);
+                *key = key_of([c[0] + o[0], c[1] + o[1], c[2] + o[2]]);
+            }
+        });
+        keys
+    };
+    sort_dedup(&mut keys);
+    let mask = (1u64 << 60) - 1;
+    let nodes: Vec<[u32; 3]> = keys.par_iter().map(|&k| demorton(k & mask)).collect();
+    let mut colors = [0usize; 9];
+    for &k in &keys {
+        colors[(k >> 60) as usize + 1] += 1;
+    }
+    for c in 0..8 {
+        colors[c + 1] += colors[c];
+    }
+    let node_index = SparseIndex::new(nodes.iter().copied(), (1 << depth) + 1, nodes.len());
+    (nodes, node_index, colors)
 }
