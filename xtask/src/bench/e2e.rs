@@ -60,6 +60,10 @@ struct Input {
 /// At the first resolution, runs of the default preset per thread count, alternating.
 const SCALING_REPEATS: usize = 5;
 
+/// Most CPU time taken by the hypervisor (as a share of the machine's) for a run to count as
+/// quiet: on a virtual machine whose host is busy, single runs lost up to a third of their time.
+const QUIET_STEAL: f64 = 0.02;
+
 /// One measured run.
 struct Run {
     wall: f64,
@@ -70,6 +74,10 @@ struct Run {
     watertight: bool,
     /// Wall times of every repeat, fastest first (this run's among them).
     walls: Vec<f64>,
+    /// Per repeat (in `walls`' order), the share of the machine's CPU time the hypervisor gave
+    /// to other guests while it ran ([`super::steal_seconds`] over wall time and cores; NaN
+    /// where unknown).
+    steals: Vec<f64>,
     /// Hash of the mesh file the run wrote.
     hash: u64,
 }
@@ -189,7 +197,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     }
     let exe = std::env::current_exe()?;
     let mut csv = String::from(
-        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status,walls_s\n",
+        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status,walls_s,steals\n",
     );
     let mut rows: Vec<(String, usize, String, usize, Result<Run>)> = Vec::new();
     for input in &inputs {
@@ -218,7 +226,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                 input.shape, input.n
             ));
             let r = child(&exe, python.as_deref(), method, threads, input, &mesh_path).and_then(
-                |(wall, cpu, rss_mb)| {
+                |(wall, cpu, rss_mb, steal)| {
                     if method == "ceiling" {
                         return Ok(Run {
                             wall,
@@ -228,6 +236,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                             faces: 0,
                             watertight: true,
                             walls: vec![wall],
+                            steals: vec![steal],
                             hash: 0,
                         });
                     }
@@ -269,6 +278,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                         faces,
                         watertight,
                         walls: vec![wall],
+                        steals: vec![steal],
                         hash,
                     })
                 },
@@ -298,7 +308,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             match &r {
                 Ok(r) => writeln!(
                     csv,
-                    "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok,{}",
+                    "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok,{},{}",
                     input.shape,
                     input.n,
                     r.wall,
@@ -310,6 +320,11 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                     r.walls
                         .iter()
                         .map(|w| format!("{w:.6}"))
+                        .collect::<Vec<_>>()
+                        .join(";"),
+                    r.steals
+                        .iter()
+                        .map(|w| format!("{w:.4}"))
                         .collect::<Vec<_>>()
                         .join(";")
                 )?,
@@ -338,8 +353,10 @@ fn median_run(runs: Vec<Result<Run>>) -> Result<Run> {
     let mut ok = runs.into_iter().collect::<Result<Vec<Run>>>()?;
     ok.sort_by(|a, b| a.wall.total_cmp(&b.wall));
     let walls: Vec<f64> = ok.iter().map(|r| r.wall).collect();
+    let steals: Vec<f64> = ok.iter().flat_map(|r| r.steals.first().copied()).collect();
     let mut median = ok.swap_remove((ok.len() - 1) / 2);
     median.walls = walls;
+    median.steals = steals;
     Ok(median)
 }
 
@@ -376,6 +393,10 @@ fn read_csv(
                     .get(11)
                     .map(|w| w.split(';').filter_map(|v| v.parse().ok()).collect())
                     .unwrap_or_else(|| vec![num(4)]),
+                steals: f
+                    .get(12)
+                    .map(|w| w.split(';').filter_map(|v| v.parse().ok()).collect())
+                    .unwrap_or_default(),
                 hash: 0,
             })
         } else {
@@ -486,6 +507,22 @@ fn report(
             rfta.fastest.1,
             rfta.fastest.0 / rfta.fastest.1,
         )?;
+        let total = 2 * rfta.shapes * rfta.runs;
+        match rfta.quiet {
+            Some((q, k)) => writeln!(
+                s,
+                "Over the quiet runs only ({k} of {total}: the hypervisor took at most {:.0}% of the machine's CPU time during the run, by `steal` in /proc/stat): median wall time per shape {:.2} to {:.2} s, **{:.2}x**.\n",
+                100.0 * QUIET_STEAL,
+                q.0,
+                q.1,
+                q.0 / q.1,
+            )?,
+            None => writeln!(
+                s,
+                "Too few quiet runs for a speed-up over them (some shape has no run on a thread count during which the hypervisor took at most {:.0}% of the CPU time).\n",
+                100.0 * QUIET_STEAL,
+            )?,
+        }
         if let Some(c) = Scaling::of(rows, n, "ceiling") {
             let (ceiling, ours) = (c.median.0 / c.median.1, rfta.median.0 / rfta.median.1);
             writeln!(
@@ -533,6 +570,9 @@ struct Scaling {
     runs: usize,
     median: (f64, f64),
     fastest: (f64, f64),
+    /// The median over the quiet runs only (steal up to [`QUIET_STEAL`]), and how many runs
+    /// that is; `None` where some shape has no quiet run on a thread count.
+    quiet: Option<((f64, f64), usize)>,
 }
 
 impl Scaling {
@@ -541,21 +581,52 @@ impl Scaling {
         n: usize,
         method: &str,
     ) -> Option<Self> {
-        let walls = |t: usize| -> Vec<(&str, &[f64])> {
+        let walls = |t: usize| -> Vec<(&str, &Run)> {
             rows.iter()
                 .filter(|(_, nn, m, tt, _)| *nn == n && m == method && *tt == t)
-                .filter_map(|(sh, _, _, _, r)| r.as_ref().ok().map(|r| (sh.as_str(), &r.walls[..])))
+                .filter_map(|(sh, _, _, _, r)| r.as_ref().ok().map(|r| (sh.as_str(), r)))
                 .collect()
         };
         let (one, two) = (walls(1), walls(2));
-        let pairs: Vec<(&[f64], &[f64])> = one
+        let runs: Vec<(&Run, &Run)> = one
             .iter()
-            .filter_map(|(sh, w1)| {
+            .filter_map(|(sh, r1)| {
                 two.iter()
                     .find(|(s2, _)| s2 == sh)
-                    .map(|(_, w2)| (*w1, *w2))
+                    .map(|(_, r2)| (*r1, *r2))
             })
             .collect();
+        let pairs: Vec<(&[f64], &[f64])> = runs
+            .iter()
+            .map(|(a, b)| (&a.walls[..], &b.walls[..]))
+            .collect();
+        // Wall times of the quiet runs (sorted, as `walls` is).
+        let quiet_walls = |r: &Run| -> Vec<f64> {
+            r.walls
+                .iter()
+                .zip(&r.steals)
+                .filter(|(_, s)| **s <= QUIET_STEAL)
+                .map(|(w, _)| *w)
+                .collect()
+        };
+        let quiet: Vec<(Vec<f64>, Vec<f64>)> = runs
+            .iter()
+            .map(|(a, b)| (quiet_walls(a), quiet_walls(b)))
+            .collect();
+        let quiet = quiet
+            .iter()
+            .all(|(a, b)| !a.is_empty() && !b.is_empty())
+            .then(|| {
+                let k = quiet.len() as f64;
+                let med = |w: &[f64]| w[(w.len() - 1) / 2];
+                (
+                    (
+                        quiet.iter().map(|q| med(&q.0)).sum::<f64>() / k,
+                        quiet.iter().map(|q| med(&q.1)).sum::<f64>() / k,
+                    ),
+                    quiet.iter().map(|q| q.0.len() + q.1.len()).sum(),
+                )
+            });
         let k = pairs.len() as f64;
         let mean = |pick: &dyn Fn(&[f64]) -> f64| -> (f64, f64) {
             (
@@ -568,6 +639,7 @@ impl Scaling {
             runs: pairs.first()?.0.len(),
             median: mean(&|w| w[(w.len() - 1) / 2]),
             fastest: mean(&|w| w[0]),
+            quiet,
         })
     }
 }
@@ -639,7 +711,7 @@ fn child(
     threads: usize,
     input: &Input,
     mesh: &Path,
-) -> Result<(f64, f64, f64)> {
+) -> Result<(f64, f64, f64, f64)> {
     let mut cmd = if method == "gpytoolbox" {
         let python = python.context("no Python with gpytoolbox")?;
         let raw = rfta_io::read_sdf(&input.path, None)?;
@@ -682,7 +754,14 @@ fn child(
     let line = stdout.lines().last().unwrap_or_default();
     let v: serde_json::Value = serde_json::from_str(line.trim()).context("child output")?;
     let get = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-    Ok((get("wall"), get("cpu"), get("rss_mb")))
+    Ok((get("wall"), get("cpu"), get("rss_mb"), get("steal")))
+}
+
+/// The share of the machine's CPU time (all cores over `wall` seconds) that the hypervisor
+/// gave to other guests since `steal0` ([`super::steal_seconds`]).
+fn steal_share(steal0: f64, wall: f64) -> f64 {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    (super::steal_seconds() - steal0) / (wall * cores)
 }
 
 /// The child: `bench-child e2e METHOD SDF MESH THREADS`; prints one JSON line.
@@ -695,20 +774,21 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
-        let cpu0 = super::process_usage().0;
+        let (cpu0, steal0) = (super::process_usage().0, super::steal_seconds());
         let t = Instant::now();
         let check = pool.install(ceiling_work);
         let wall = t.elapsed().as_secs_f64();
         let (cpu, rss_mb) = super::process_usage();
+        let steal = steal_share(steal0, wall);
         println!(
-            "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"check\": {check}}}",
+            "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}, \"check\": {check}}}",
             cpu - cpu0
         );
         return Ok(());
     }
     let path = Path::new(sdf);
     let samples = rfta_io::read_sdf(path, None)?.validate(path)?;
-    let cpu0 = super::process_usage().0;
+    let (cpu0, steal0) = (super::process_usage().0, super::steal_seconds());
     let t = Instant::now();
     let mesh: TriMesh = match method.as_str() {
         "mc" => {
@@ -731,9 +811,10 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
     };
     let wall = t.elapsed().as_secs_f64();
     let (cpu, rss_mb) = super::process_usage();
+    let steal = steal_share(steal0, wall);
     rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
     println!(
-        "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}}}",
+        "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}}}",
         cpu - cpu0
     );
     Ok(())
@@ -743,7 +824,7 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
 mod tests {
     use super::*;
 
-    fn run(walls: &[f64]) -> Result<Run> {
+    fn run(walls: &[f64], steals: &[f64]) -> Result<Run> {
         Ok(Run {
             wall: walls[(walls.len() - 1) / 2],
             cpu: 0.0,
@@ -752,6 +833,7 @@ mod tests {
             faces: 0,
             watertight: true,
             walls: walls.to_vec(),
+            steals: steals.to_vec(),
             hash: 0,
         })
     }
@@ -764,7 +846,7 @@ mod tests {
                 20,
                 method.to_string(),
                 threads,
-                run(walls),
+                run(walls, &[0.0; 3]),
             )
         };
         let rows = vec![
@@ -786,5 +868,37 @@ mod tests {
         assert_eq!(c.median, (0.6, 0.3));
         assert!(Scaling::of(&rows, 30, "rfta").is_none());
         assert!(Scaling::of(&rows, 20, "mc").is_none());
+        // Every run quiet: the quiet medians are the medians.
+        assert_eq!(s.quiet, Some(((3.0, 1.5), 12)));
+    }
+
+    #[test]
+    fn the_quiet_speed_up_leaves_out_runs_the_hypervisor_slowed() {
+        let rows = vec![
+            (
+                "a".into(),
+                20,
+                "rfta".into(),
+                1,
+                run(&[1.0, 2.0, 3.0], &[0.0, 0.5, 0.01]),
+            ),
+            (
+                "a".into(),
+                20,
+                "rfta".into(),
+                2,
+                run(&[0.5, 1.0, 2.0], &[0.3, 0.0, 0.0]),
+            ),
+        ];
+        let s = Scaling::of(&rows, 20, "rfta").expect("one shape");
+        // Quiet: 1.0 and 3.0 on one thread (median 1.0), 1.0 and 2.0 on two (median 1.0).
+        assert_eq!(s.quiet, Some(((1.0, 1.0), 4)));
+        assert_eq!(s.median, (2.0, 1.0));
+        let rows = vec![
+            ("a".into(), 20, "rfta".into(), 1, run(&[1.0], &[0.5])),
+            ("a".into(), 20, "rfta".into(), 2, run(&[0.5], &[0.0])),
+        ];
+        let s = Scaling::of(&rows, 20, "rfta").expect("one shape");
+        assert_eq!(s.quiet, None);
     }
 }

@@ -35,6 +35,20 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
     }
 }
 
+/// CPU time the hypervisor gave to other guests since boot, summed over this machine's cores
+/// (`steal` of /proc/stat, in its 100 Hz ticks); NaN where there is no such file (not Linux).
+pub(crate) fn steal_seconds() -> f64 {
+    std::fs::read_to_string("/proc/stat")
+        .ok()
+        .and_then(|s| {
+            let cpu = s.lines().next()?.split_whitespace().collect::<Vec<_>>();
+            (cpu.first() == Some(&"cpu"))
+                .then(|| cpu.get(8)?.parse::<f64>().ok())
+                .flatten()
+        })
+        .map_or(f64::NAN, |ticks| ticks / 100.0)
+}
+
 /// CPU seconds (user + system, all threads) and peak resident memory (MB) of this process so far,
 /// from `/proc` (Linux; NaN elsewhere). CPU time has a 10 ms resolution.
 pub(crate) fn process_usage() -> (f64, f64) {
