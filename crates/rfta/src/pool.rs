@@ -131,7 +131,7 @@ impl Waiters {
                 if rayon::yield_now() == Some(rayon::Yield::Executed) {
                     idle_since = None;
                 } else if idle_since.get_or_insert_with(Instant::now).elapsed() < ACTIVE_WAIT {
-                    std::thread::yield_now();
+                    std::hint::spin_loop();
                 } else {
                     break;
                 }
