@@ -315,9 +315,9 @@ pub const SIDE_RESOLVE_SWEEPS: usize = 2;
 /// where the plain solution disagrees. A wrong side point whose cell the octree does not refine
 /// to its finest depth gets its cell refined (the octree rebuilt as if a sample were there): a
 /// constraint on coarse depths alone is undone by the finer hats beside it. Side points outside
-/// the reconstruction cube are ignored,
-/// and re-solves whose surface reaches the cube's faces (where it would come out open) are
-/// dropped for the first solve's surface when that one stays inside.
+/// the reconstruction cube are ignored, and re-solves whose surface reaches the cube's faces
+/// (where it would come out open) are dropped for the first solve's surface when that one stays
+/// inside.
 /// [`SpsrReport::side_errors`] says how many were wrong after each solve whose surface it
 /// returns.
 ///

@@ -519,7 +519,7 @@ fn report(
             )?,
             None => writeln!(
                 s,
-                "Too few quiet runs for a speed-up over them (some shape has no run on a thread count during which the hypervisor took at most {:.0}% of the CPU time).\n",
+                "Too few quiet runs for a speed-up over them (some shape has no run on a thread count during which the hypervisor took at most {:.0}% of the CPU time, or this machine has no `steal` counter).\n",
                 100.0 * QUIET_STEAL,
             )?,
         }
