@@ -8,6 +8,8 @@
 //! moved to the right-hand side with exact parent-child integrals, and the depth's own system is
 //! relaxed (conjugate gradients on the complete coarse grids, multi-colour Gauss-Seidel above).
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
@@ -615,9 +617,11 @@ fn k_row(sys: &LevelSystem, c: [u32; 3], n: u32) -> [f64; 27] {
 }
 
 /// Multi-colour Gauss-Seidel: nodes of one colour share no matrix entry, so each colour is
-/// relaxed in parallel and the result does not depend on the thread count. The value of the
-/// current iterate at every screening cell is kept up to date after each colour, so a node's
-/// screening term costs one read per incident cell.
+/// relaxed in parallel, in place, and the result does not depend on the thread count. The value
+/// of the current iterate at every screening cell is kept up to date: a cell has exactly one
+/// corner of each colour, so the node that moves updates its cells' values itself (no other node
+/// of its colour reads or writes them), and a node's screening term costs one read per incident
+/// cell. One parallel loop per colour and sweep.
 fn gauss_seidel(
     level: &Level,
     sys: &LevelSystem,
@@ -627,66 +631,56 @@ fn gauss_seidel(
     sweeps: usize,
 ) {
     let n = level.n();
-    let mut fs: Vec<f64> = sys
+    // Each cell's value, as bits: written only by the one node of the colour being relaxed.
+    let fs: Vec<AtomicU64> = sys
         .screen
         .par_iter()
         .map(|s| {
             let corners = &level.corners[s.cell as usize];
-            (0..8).map(|k| s.hats[k] * x[corners[k] as usize]).sum()
+            let f: f64 = (0..8).map(|k| s.hats[k] * x[corners[k] as usize]).sum();
+            AtomicU64::new(f.to_bits())
         })
         .collect();
-    // One colour's new values, then (after the swap) its old ones.
-    let widest = (0..8)
-        .map(|c| level.colors[c + 1] - level.colors[c])
-        .max()
-        .unwrap_or(0);
-    let mut buf = vec![0.0; widest];
+    let value = |e: u32| f64::from_bits(fs[(e >> 3) as usize].load(Ordering::Relaxed));
     for _ in 0..sweeps {
         for c in 0..8 {
             let (lo, hi) = (level.colors[c], level.colors[c + 1]);
-            let xs: &[f64] = x;
-            let fsr: &[f64] = &fs;
-            buf[..hi - lo]
-                .par_iter_mut()
+            // The colour's nodes are contiguous; its neighbours are all outside it.
+            let (before, rest) = x.split_at_mut(lo);
+            let (mine, after) = rest.split_at_mut(hi - lo);
+            let (before, after): (&[f64], &[f64]) = (before, after);
+            let at = |j: usize| if j < lo { before[j] } else { after[j - hi] };
+            mine.par_iter_mut()
                 .with_min_len(GRAIN)
                 .enumerate()
-                .for_each(|(k, out)| {
+                .for_each(|(k, xi)| {
                     let i = lo + k;
-                    if sys.fixed[i] {
-                        *out = 0.0;
-                        return;
-                    }
-                    let row = k_row(sys, level.nodes[i], n);
-                    let nb = &nbr[i * 27..i * 27 + 27];
-                    let mut acc = 0.0;
-                    for o in 0..27 {
-                        let j = nb[o];
-                        if o != 13 && j != NONE {
-                            acc += row[o] * xs[j as usize];
+                    let old = *xi;
+                    let incident = &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize];
+                    let new = if sys.fixed[i] {
+                        0.0
+                    } else {
+                        let row = k_row(sys, level.nodes[i], n);
+                        let nb = &nbr[i * 27..i * 27 + 27];
+                        let mut acc = 0.0;
+                        for o in 0..27 {
+                            let j = nb[o];
+                            if o != 13 && j != NONE {
+                                acc += row[o] * at(j as usize);
+                            }
                         }
-                    }
-                    let xi = xs[i];
-                    for &e in &sys.inc[sys.inc_off[i] as usize..sys.inc_off[i + 1] as usize] {
-                        let s = &sys.screen[(e >> 3) as usize];
-                        let h = s.hats[(e & 7) as usize];
-                        acc += s.weight * h * (fsr[(e >> 3) as usize] - h * xi);
-                    }
-                    *out = (r[i] - acc) / sys.diag[i];
-                });
-            x[lo..hi].swap_with_slice(&mut buf[..hi - lo]);
-            // Cells see exactly one corner of each colour.
-            let xs: &[f64] = x;
-            let old = &buf;
-            fs.par_iter_mut()
-                .with_min_len(GRAIN)
-                .zip(&sys.screen)
-                .for_each(|(f, s)| {
-                    let corners = &level.corners[s.cell as usize];
-                    for k in 0..8 {
-                        let j = corners[k] as usize;
-                        if j >= lo && j < hi {
-                            *f += s.hats[k] * (xs[j] - old[j - lo]);
+                        for &e in incident {
+                            let s = &sys.screen[(e >> 3) as usize];
+                            let h = s.hats[(e & 7) as usize];
+                            acc += s.weight * h * (value(e) - h * old);
                         }
+                        (r[i] - acc) / sys.diag[i]
+                    };
+                    *xi = new;
+                    for &e in incident {
+                        let h = sys.screen[(e >> 3) as usize].hats[(e & 7) as usize];
+                        let f = value(e) + h * (new - old);
+                        fs[(e >> 3) as usize].store(f.to_bits(), Ordering::Relaxed);
                     }
                 });
         }
