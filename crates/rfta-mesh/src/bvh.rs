@@ -1,10 +1,7 @@
 //! The bounding volume hierarchy over triangles and the distance queries.
 
-use std::time::Duration;
-
-use obvhs::{BvhBuildParams, aabb::Aabb as ObAabb, bvh2::builder::build_bvh2};
 use rayon::prelude::*;
-use rfta_geom::{Aabb, Grid, TriMesh, glam::DVec3, glam::Vec3A, kernels};
+use rfta_geom::{Aabb, Grid, TriMesh, glam::DVec3, kernels};
 
 use crate::winding::Moments;
 use crate::{Error, Result};
@@ -45,7 +42,7 @@ impl Slab {
 
 impl Node {
     /// A node whose contents are filled in once its children are built.
-    const PENDING: Node = Node {
+    pub(crate) const PENDING: Node = Node {
         bounds: Aabb::EMPTY,
         a: 0,
         b: 0,
@@ -54,7 +51,7 @@ impl Node {
     };
 
     /// The inner node over `nodes[left]` and `nodes[right]` (its slab is filled later).
-    fn inner(nodes: &[Node], left: u32, right: u32) -> Node {
+    pub(crate) fn inner(nodes: &[Node], left: u32, right: u32) -> Node {
         Node {
             bounds: nodes[left as usize]
                 .bounds
@@ -116,121 +113,6 @@ pub enum Shell {
     Beyond,
 }
 
-struct TriBox(ObAabb);
-
-impl obvhs::Boundable for TriBox {
-    fn aabb(&self) -> ObAabb {
-        self.0
-    }
-}
-
-/// The obvhs box holding an `f64` box.
-fn to_obvhs(b: &Aabb) -> ObAabb {
-    let (lo, hi) = b.to_f32_outward();
-    ObAabb::new(Vec3A::from(lo), Vec3A::from(hi))
-}
-
-/// Faces per part of a parallel build ([`MeshIndex::new`]).
-const PART_FACES: usize = 65_536;
-
-/// Most parts of a parallel build.
-const MAX_PARTS: usize = 64;
-
-/// One part's tree: nodes in depth-first order with leaves indexing `faces` from 0.
-struct Part {
-    nodes: Vec<Node>,
-    /// The part's faces (indices into the mesh) in leaf order.
-    faces: Vec<u32>,
-}
-
-impl Part {
-    /// obvhs's tree over `faces`, flattened with exact `f64` boxes.
-    fn build(corners: &[[DVec3; 3]], faces: &[u32]) -> Part {
-        let boxes: Vec<TriBox> = faces
-            .par_iter()
-            .map(|&f| TriBox(to_obvhs(&Aabb::from_points(corners[f as usize].iter()))))
-            .collect();
-        let ob = build_bvh2(
-            &boxes,
-            BvhBuildParams::fast_build(),
-            &mut Duration::default(),
-        );
-        let mut part = Part {
-            nodes: Vec::with_capacity(ob.nodes.len()),
-            faces: Vec::with_capacity(faces.len()),
-        };
-        part.flatten(&ob, 0, corners, faces);
-        part
-    }
-
-    /// Copies obvhs node `ob_idx` and its subtree; returns the new node's index.
-    fn flatten(
-        &mut self,
-        ob: &obvhs::bvh2::Bvh2,
-        ob_idx: usize,
-        corners: &[[DVec3; 3]],
-        faces: &[u32],
-    ) -> u32 {
-        let node = &ob.nodes[ob_idx];
-        let my = self.nodes.len() as u32;
-        self.nodes.push(Node::PENDING);
-        if node.is_leaf() {
-            let first = self.faces.len() as u32;
-            let mut bounds = Aabb::EMPTY;
-            let prims = &ob.primitive_indices
-                [node.first_index as usize..(node.first_index + node.prim_count) as usize];
-            for &p in prims {
-                let f = faces[p as usize];
-                self.faces.push(f);
-                bounds = bounds.union(Aabb::from_points(corners[f as usize].iter()));
-            }
-            self.nodes[my as usize] = Node {
-                bounds,
-                a: first,
-                b: prims.len() as u32,
-                leaf: true,
-                slab: Slab::NONE,
-            };
-        } else {
-            let left = self.flatten(ob, node.first_index as usize, corners, faces);
-            let right = self.flatten(ob, node.first_index as usize + 1, corners, faces);
-            self.nodes[my as usize] = Node::inner(&self.nodes, left, right);
-        }
-        my
-    }
-}
-
-/// The faces in the order of their centroids along a Morton curve (21 bits per axis over the
-/// centroids' box), ties by index.
-fn morton_order(corners: &[[DVec3; 3]]) -> Vec<u32> {
-    let centroids: Vec<DVec3> = corners
-        .par_iter()
-        .map(|[a, b, c]| (*a + *b + *c) / 3.0)
-        .collect();
-    let bounds = Aabb::from_points(centroids.iter());
-    let scale = DVec3::splat(f64::from((1u32 << 21) - 1))
-        / (bounds.max - bounds.min).max(DVec3::splat(1e-300));
-    let spread = |v: u64| {
-        let mut x = v & 0x1f_ffff;
-        x = (x | x << 32) & 0x1f_0000_0000_ffff;
-        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
-        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-        (x | x << 2) & 0x1249_2492_4924_9249
-    };
-    let mut keyed: Vec<(u64, u32)> = centroids
-        .par_iter()
-        .enumerate()
-        .map(|(f, c)| {
-            let q = ((*c - bounds.min) * scale).max(DVec3::ZERO);
-            let k = spread(q.x as u64) | spread(q.y as u64) << 1 | spread(q.z as u64) << 2;
-            (k, f as u32)
-        })
-        .collect();
-    keyed.par_sort_unstable();
-    keyed.into_iter().map(|(_, f)| f).collect()
-}
-
 impl MeshIndex {
     /// Builds the index over `mesh`.
     ///
@@ -242,38 +124,17 @@ impl MeshIndex {
         if mesh.is_empty() {
             return Err(Error::EmptyMesh);
         }
-        let n = mesh.n_faces();
-        let corners: Vec<[DVec3; 3]> = (0..n).into_par_iter().map(|f| mesh.triangle(f)).collect();
-        // Parts of the mesh, contiguous along a Morton curve through the face centroids, are
-        // built side by side and joined under a balanced top. How many depends only on the face
-        // count, so the tree (and which of two equidistant faces a query finds) does not depend
-        // on the thread count.
-        let n_parts = (n / PART_FACES).clamp(1, MAX_PARTS);
-        let faces: Vec<u32> = if n_parts == 1 {
-            (0..n as u32).collect()
-        } else {
-            morton_order(&corners)
-        };
-        let part_len = n.div_ceil(n_parts);
-        let parts: Vec<Part> = faces
-            .par_chunks(part_len)
-            .map(|faces| Part::build(&corners, faces))
+        let corners: Vec<[DVec3; 3]> = (0..mesh.n_faces())
+            .into_par_iter()
+            .map(|f| mesh.triangle(f))
             .collect();
-        let mut first_tri = Vec::with_capacity(parts.len());
-        let mut order = Vec::with_capacity(n);
-        for part in &parts {
-            first_tri.push(order.len() as u32);
-            order.extend(&part.faces);
-        }
+        let (nodes, order) = crate::build::build(&corners);
         let mut index = MeshIndex {
-            nodes: Vec::with_capacity(parts.iter().map(|p| p.nodes.len() + 1).sum()),
-            tris: Vec::new(),
-            face_ids: Vec::new(),
+            nodes,
+            tris: order.par_iter().map(|&f| corners[f as usize]).collect(),
+            face_ids: order,
             moments: Vec::new(),
         };
-        index.join(&parts, &first_tri, 0..parts.len());
-        index.tris = order.par_iter().map(|&f| corners[f as usize]).collect();
-        index.face_ids = order;
         index.moments = crate::winding::node_moments(&index);
         index.fill_slabs();
         Ok(index)
@@ -323,33 +184,6 @@ impl MeshIndex {
         for (node, slab) in self.nodes.iter_mut().zip(slabs) {
             node.slab = slab;
         }
-    }
-
-    /// Appends the parts `range` (their trees joined pairwise under new inner nodes, depth
-    /// first); returns the index of their root.
-    fn join(&mut self, parts: &[Part], first_tri: &[u32], range: std::ops::Range<usize>) -> u32 {
-        let my = self.nodes.len() as u32;
-        if range.len() == 1 {
-            let (part, tri) = (&parts[range.start], first_tri[range.start]);
-            self.nodes.extend(part.nodes.iter().map(|n| {
-                if n.leaf {
-                    Node { a: n.a + tri, ..*n }
-                } else {
-                    Node {
-                        a: n.a + my,
-                        b: n.b + my,
-                        ..*n
-                    }
-                }
-            }));
-            return my;
-        }
-        self.nodes.push(Node::PENDING);
-        let mid = range.start + range.len() / 2;
-        let left = self.join(parts, first_tri, range.start..mid);
-        let right = self.join(parts, first_tri, mid..range.end);
-        self.nodes[my as usize] = Node::inner(&self.nodes, left, right);
-        my
     }
 
     /// Number of triangles.

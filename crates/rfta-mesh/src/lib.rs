@@ -1,8 +1,9 @@
 //! Triangle-mesh queries for rfta: closest point, unsigned and signed distance, the fast
 //! generalized winding number, seeded area-weighted surface samples, and topology checks.
 //!
-//! [`MeshIndex`] builds a bounding volume hierarchy over a [`TriMesh`] once (the tree is built
-//! by obvhs and then flattened into `f64` boxes, so every query is exact in double precision)
+//! [`MeshIndex`] builds a bounding volume hierarchy over a [`TriMesh`] once (split by the
+//! surface area heuristic in `f64` boxes, so every query is exact in double precision; the
+//! halves of large ranges are built side by side, into the same tree on any number of threads)
 //! and answers queries from any number of threads.
 //!
 //! - [`MeshIndex::closest_point`] and [`MeshIndex::unsigned_distance`]: exact point-to-triangle
@@ -33,6 +34,7 @@
 //! # Ok::<(), rfta_mesh::Error>(())
 //! ```
 
+mod build;
 mod bvh;
 mod sample;
 mod topology;
