@@ -132,6 +132,24 @@ fn half_area(b: &Aabb) -> f64 {
     e.x * e.y + e.y * e.z + e.z * e.x
 }
 
+/// `of` over the faces `order`, in chunks side by side from [`PARALLEL_FROM`] faces on, the
+/// chunks' results joined by `merge` (exact minima, maxima and counts, so the result does not
+/// depend on how the chunks fall).
+fn gather<T: Copy + Send + Sync>(
+    order: &[u32],
+    empty: T,
+    of: impl Fn(&[u32]) -> T + Sync + Send,
+    merge: impl Fn(T, T) -> T + Sync + Send,
+) -> T {
+    if order.len() < PARALLEL_FROM {
+        return of(order);
+    }
+    order
+        .par_chunks(PARALLEL_FROM / 4)
+        .map(of)
+        .reduce(|| empty, merge)
+}
+
 /// Reorders `order` so that the faces on the cheap side of a split come first; returns how many
 /// they are (both sides hold at least one face). The split is across the axis along which the
 /// centroids spread most, at the bin boundary of least cost `A_left n_left + A_right n_right`
@@ -146,15 +164,7 @@ fn split(faces: &[Face], order: &mut [u32]) -> usize {
             }
         })
     };
-    let large = order.len() >= PARALLEL_FROM;
-    let cb = if large {
-        order
-            .par_chunks(PARALLEL_FROM / 4)
-            .map(centroid_bounds)
-            .reduce(|| Aabb::EMPTY, Aabb::union)
-    } else {
-        centroid_bounds(order)
-    };
+    let cb = gather(order, Aabb::EMPTY, centroid_bounds, Aabb::union);
     let extent = cb.max - cb.min;
     let axis = extent.max_position();
     if extent[axis] <= 0.0 {
@@ -171,14 +181,7 @@ fn split(faces: &[Face], order: &mut [u32]) -> usize {
         }
         bins
     };
-    let bins = if large {
-        order
-            .par_chunks(PARALLEL_FROM / 4)
-            .map(fill)
-            .reduce(|| Bins::EMPTY, Bins::merge)
-    } else {
-        fill(order)
-    };
+    let bins = gather(order, Bins::EMPTY, fill, Bins::merge);
     // The cost of everything after bin `k`, then the cheapest boundary (the first of equals).
     let mut right_cost = [0.0; BINS];
     let (mut n, mut b) = (0u32, Aabb::EMPTY);
