@@ -1,15 +1,15 @@
 //! Building the tree: the faces split top-down by the surface area heuristic over binned
 //! centroids (Wald, "On fast construction of SAH-based bounding volume hierarchies", 2007), the
 //! two halves of a large range built side by side. Every choice depends only on the faces (exact
-//! minima, maxima and counts, ties to the first axis and bin), so the tree, and which of two
-//! equidistant faces a query finds, is the same on any number of threads.
+//! minima, maxima and counts, ties to the first bin), so the tree, and which of two equidistant
+//! faces a query finds, is the same on any number of threads.
 
 use rayon::prelude::*;
 use rfta_geom::{Aabb, glam::DVec3};
 
 use crate::bvh::Node;
 
-/// Centroid bins per axis.
+/// Centroid bins along the axis a range is split across.
 const BINS: usize = 16;
 
 /// Ranges of at most this many faces become leaves.
@@ -56,13 +56,9 @@ fn subtree(faces: &[Face], order: &mut [u32], first: u32) -> Vec<Node> {
         || subtree(faces, hi, first + mid as u32),
     );
     let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
-    nodes.push(Node {
-        bounds: left[0].bounds.union(right[0].bounds),
-        a: 1,
-        b: 1 + left.len() as u32,
-        ..Node::PENDING
-    });
-    for (part, offset) in [(&left, 1), (&right, 1 + left.len() as u32)] {
+    nodes.push(Node::PENDING);
+    let right_root = 1 + left.len() as u32;
+    for (part, offset) in [(&left, 1), (&right, right_root)] {
         nodes.extend(part.iter().map(|n| {
             if n.leaf {
                 *n
@@ -75,6 +71,7 @@ fn subtree(faces: &[Face], order: &mut [u32], first: u32) -> Vec<Node> {
             }
         }));
     }
+    nodes[0] = Node::inner(&nodes, 1, right_root);
     nodes
 }
 
@@ -224,8 +221,9 @@ mod tests {
         (0..mesh.n_faces()).map(|f| mesh.triangle(f)).collect()
     }
 
-    /// Checks the tree's shape against its definition; returns the faces met in depth-first
-    /// order of the leaves.
+    /// Checks the tree against its definition: leaves of 1 to `LEAF_FACES` faces covering the
+    /// face order in depth-first order, every face once, each inside its leaf's box, children
+    /// after their parent, inner boxes the union of their children's.
     fn check(nodes: &[Node], order: &[u32], corners: &[[DVec3; 3]]) {
         let mut seen = vec![false; corners.len()];
         let mut next = 0u32;
