@@ -393,6 +393,7 @@ fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result
         "entered": c.entered,
         "gaps": c.gaps,
         "deepest_entry": c.deepest_entry,
+        "thin_loops": c.thin_loops,
         "warnings": r.warnings,
         "stopped_early": r.stopped_early,
     });

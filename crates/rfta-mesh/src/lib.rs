@@ -16,6 +16,7 @@
 //!   exceeds 1/2 (libigl's convention), so it works on meshes with small holes too.
 //! - [`sample_surface`]: area-weighted random points with a seed.
 //! - [`Topology`]: watertight, manifold, oriented, Euler characteristic, genus, components.
+//! - [`short_loops`]: the handles a short loop goes around (thinner than a sampling resolves).
 //!
 //! # Example
 //! ```
@@ -36,12 +37,14 @@
 
 mod build;
 mod bvh;
+mod loops;
 mod sample;
 mod topology;
 mod union_find;
 mod winding;
 
 pub use bvh::{ClosestPoint, MeshIndex, Shell};
+pub use loops::{ShortLoops, short_loops};
 pub use rfta_geom::TriMesh;
 pub use sample::{SurfaceSample, sample_surface};
 pub use topology::Topology;

@@ -395,6 +395,7 @@ fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<B
     d.set_item("entered", c.entered)?;
     d.set_item("gaps", c.gaps)?;
     d.set_item("deepest_entry", c.deepest_entry)?;
+    d.set_item("thin_loops", c.thin_loops.clone())?;
     d.set_item("warnings", r.warnings.clone())?;
     let timings = PyDict::new(py);
     for (stage, t) in &r.timings {

@@ -117,6 +117,13 @@ pub(crate) fn finish(
             c.deepest_entry
         ));
     }
+    if let Some(&shortest) = c.thin_loops.first() {
+        report.warnings.push(format!(
+            "the mesh has {} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, which the samples can neither confirm nor rule out; finer samples can",
+            c.thin_loops.len(),
+            consistency::THIN_LOOP
+        ));
+    }
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
     let eligible = n - report.far_spheres;

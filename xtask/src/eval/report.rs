@@ -85,7 +85,7 @@ fn reference_method(m: &str) -> String {
 
 pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,sign_errors,entered,gaps,deepest_entry,status\n",
+        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,sign_errors,entered,gaps,deepest_entry,thin_loops,status\n",
     );
     for r in rows {
         let g = |v: Option<i64>| v.map(|g| g.to_string()).unwrap_or_default();
@@ -93,7 +93,7 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             |f: fn(&rfta::Consistency) -> String| r.consistency.as_ref().map(f).unwrap_or_default();
         writeln!(
             s,
-            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{}",
             r.shape,
             r.n,
             r.method,
@@ -110,6 +110,7 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             c(|c| c.entered.to_string()),
             c(|c| c.gaps.to_string()),
             c(|c| format!("{:.3}", c.deepest_entry)),
+            c(|c| c.thin_loops.len().to_string()),
             r.status.replace(',', ";")
         )?;
     }
@@ -301,7 +302,7 @@ pub(crate) fn write_markdown(
     writeln!(s, "\n## Per shape\n")?;
     writeln!(
         s,
-        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | wrong side / entered | status |"
+        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | wrong side / entered / thin loops | status |"
     )?;
     writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
     for r in rows {
@@ -328,7 +329,7 @@ pub(crate) fn write_markdown(
             r.components,
             r.consistency
                 .as_ref()
-                .map(|c| format!("{} / {}", c.sign_errors, c.entered))
+                .map(|c| format!("{} / {} / {}", c.sign_errors, c.entered, c.thin_loops.len()))
                 .unwrap_or_else(|| "-".into()),
             r.status
         )?;
@@ -352,13 +353,14 @@ fn write_consistency(
     writeln!(s, "## Agreement with the samples and the topology\n")?;
     writeln!(
         s,
-        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; the shapes whose output has the ground truth's genus and one component. The reference rows give the last column for the shared data's results on the same shapes (the other columns were not measured for them).\n",
+        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; independent loops around handles shorter than {:.2} h, thin handles the samples can neither confirm nor rule out (total, and the shapes with any); the shapes whose output has the ground truth's genus and one component. The reference rows give the last column for the shared data's results on the same shapes (the other columns were not measured for them).\n",
         rfta::consistency::SIGN_MARGIN,
-        rfta::consistency::ENTER_MARGIN
+        rfta::consistency::ENTER_MARGIN,
+        rfta::consistency::THIN_LOOP
     )?;
     writeln!(
         s,
-        "| N | method | shapes | wrong side (shapes) | entered (shapes) | worst entered % | right genus, one component |\n|---|---|---|---|---|---|---|"
+        "| N | method | shapes | wrong side (shapes) | entered (shapes) | worst entered % | thin loops (shapes) | right genus, one component |\n|---|---|---|---|---|---|---|---|"
     )?;
     for &n in res {
         for m in methods {
@@ -375,13 +377,18 @@ fn write_consistency(
                 .iter()
                 .map(|(_, c)| 100.0 * c.entered as f64 / c.samples.max(1) as f64)
                 .fold(0.0, f64::max);
+            let thin: usize = done.iter().map(|(_, c)| c.thin_loops.len()).sum();
+            let thin_shapes = done
+                .iter()
+                .filter(|(_, c)| !c.thin_loops.is_empty())
+                .count();
             let right = done
                 .iter()
                 .filter(|(r, _)| r.genus.is_some() && r.genus == r.gt_genus && r.components == 1)
                 .count();
             writeln!(
                 s,
-                "| {n} | {m} | {} of {} | {wrong} ({wrong_shapes}) | {entered} ({entered_shapes}) | {worst:.2} | {right} |",
+                "| {n} | {m} | {} of {} | {wrong} ({wrong_shapes}) | {entered} ({entered_shapes}) | {worst:.2} | {thin} ({thin_shapes}) | {right} |",
                 done.len(),
                 sel.len()
             )?;
@@ -404,7 +411,7 @@ fn write_consistency(
             }
             writeln!(
                 s,
-                "| {n} | reference {m} | {} of {} | - | - | - | {} |",
+                "| {n} | reference {m} | {} of {} | - | - | - | - | {} |",
                 known.len(),
                 shapes.len(),
                 known.iter().filter(|&&k| k).count()

@@ -137,7 +137,8 @@ class Reconstruction:
     """(p, 3) float64 unit normals of the tangency points."""
     report: dict = field(default_factory=dict)
     """What the reconstruction did: counts, agreement with the samples (``sign_errors``,
-    ``entered``, ``gaps``), ``warnings``, ``timings`` in seconds."""
+    ``entered``, ``gaps``; ``thin_loops``, the lengths in spacings of the loops around handles
+    thinner than the samples resolve), ``warnings``, ``timings`` in seconds."""
 
     def to_trimesh(self) -> Any:
         """The mesh as a ``trimesh.Trimesh`` (needs the ``trimesh`` package)."""
