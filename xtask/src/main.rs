@@ -33,6 +33,7 @@ commands:
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
+            [rfta-genus: the default preset told the ground truth's genus; not run unless named]
             [--2d: the 2D pipeline and marching squares on inputs2d, --res 16,32,64]
             [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]: Table 2 with marching
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,

@@ -113,6 +113,10 @@ pub(crate) struct Tuning {
     /// keeps all; default: the library's `Params::min_island`).
     #[arg(long)]
     min_island: Option<f64>,
+    /// The shape's genus, when known: the output becomes one surface of at most this genus (other
+    /// components joined to the largest by a tube, the thinnest handles beyond it cut).
+    #[arg(long)]
+    genus: Option<usize>,
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
     /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
     /// samples always do).
@@ -149,6 +153,7 @@ impl Tuning {
         opt("max-points", self.max_points.map(|v| v.to_string()));
         opt("seed", self.seed.map(|v| v.to_string()));
         opt("min-island", self.min_island.map(|v| v.to_string()));
+        opt("genus", self.genus.map(|v| v.to_string()));
         opt("owner-band", self.owner_band.map(|v| v.to_string()));
         opt("raster-res", self.raster_res.map(|v| v.to_string()));
         opt("depth", self.depth.map(|v| v.to_string()));
@@ -176,6 +181,9 @@ impl Tuning {
         p.gpu = !matches!(self.gpu, Gpu::Off);
         if let Some(m) = self.min_island {
             p.min_island = m;
+        }
+        if self.genus.is_some() {
+            p.genus = self.genus;
         }
         if self.depth.is_some() {
             p.spsr_depth = self.depth;
@@ -262,6 +270,12 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
         ui.detail(format!(
             "split {} faces that cut a small sample sphere with the sample on the wrong side, and dented them past it",
             r.dents
+        ));
+    }
+    if r.components_joined + r.handles_cut > 0 {
+        ui.say(format!(
+            "to reach the genus asked: joined {} component(s) to the largest, cut {} handle(s)",
+            r.components_joined, r.handles_cut
         ));
     }
     let c = &r.consistency;

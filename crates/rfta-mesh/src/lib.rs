@@ -16,7 +16,8 @@
 //!   exceeds 1/2 (libigl's convention), so it works on meshes with small holes too.
 //! - [`sample_surface`]: area-weighted random points with a seed.
 //! - [`Topology`]: watertight, manifold, oriented, Euler characteristic, genus, components.
-//! - [`short_loops`]: the handles a short loop goes around (thinner than a sampling resolves).
+//! - [`short_loops`]: the handles a short loop goes around (thinner than a sampling resolves);
+//!   [`cut_along`] such a loop, [`join`] two components by a tube.
 //!
 //! # Example
 //! ```
@@ -39,6 +40,7 @@ mod build;
 mod bvh;
 mod loops;
 mod sample;
+mod surgery;
 mod topology;
 mod union_find;
 mod winding;
@@ -47,6 +49,7 @@ pub use bvh::{ClosestPoint, MeshIndex, Shell};
 pub use loops::{ShortLoops, short_loops};
 pub use rfta_geom::TriMesh;
 pub use sample::{SurfaceSample, sample_surface};
+pub use surgery::{cut_along, join};
 pub use topology::Topology;
 pub use union_find::UnionFind;
 

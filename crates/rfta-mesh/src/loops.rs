@@ -31,6 +31,9 @@ pub struct ShortLoops {
     /// thin one way contributes one (the loop around it), a handle short both ways two. At most
     /// `2 genus`.
     pub lengths: Vec<f64>,
+    /// The loops themselves, in the same order: simple cycles of vertex indices, each vertex
+    /// joined to the next (and the last to the first) by an edge of the mesh.
+    pub loops: Vec<Vec<u32>>,
 }
 
 /// The shortest independent non-contractible loops of `mesh` shorter than `max_length` (over Z2
@@ -57,6 +60,7 @@ pub fn short_loops(mesh: &TriMesh, max_length: f64) -> Option<ShortLoops> {
         return Some(ShortLoops {
             genus,
             lengths: Vec::new(),
+            loops: Vec::new(),
         });
     }
     // A non-contractible loop has an edge of non-zero class, so base vertices at the ends of
@@ -69,7 +73,7 @@ pub fn short_loops(mesh: &TriMesh, max_length: f64) -> Option<ShortLoops> {
         .collect();
     bases.sort_unstable();
     bases.dedup();
-    let mut candidates: Vec<(f64, Vec<u64>)> = bases
+    let mut candidates: Vec<Candidate> = bases
         .par_iter()
         .map_init(
             || Search::new(graph.offsets.len() - 1, classes.words),
@@ -79,13 +83,19 @@ pub fn short_loops(mesh: &TriMesh, max_length: f64) -> Option<ShortLoops> {
         .collect();
     // Each base vertex's own greedy basis (at most 2g loops), in the bases' order, then one
     // over all of them (a stable sort: the same on any thread count).
-    candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+    candidates.sort_by(|a, b| a.length.total_cmp(&b.length));
     let mut basis = Basis::new(classes.bits);
-    let lengths = candidates
-        .into_iter()
-        .filter_map(|(length, class)| basis.insert(class).then_some(length))
+    candidates.retain(|c| basis.insert(c.class.clone()));
+    let mut search = Search::new(graph.offsets.len() - 1, classes.words);
+    let loops = candidates
+        .iter()
+        .map(|c| search.cycle(&graph, &classes, c, max_length))
         .collect();
-    Some(ShortLoops { genus, lengths })
+    Some(ShortLoops {
+        genus,
+        lengths: candidates.iter().map(|c| c.length).collect(),
+        loops,
+    })
 }
 
 /// The mesh's edges and vertex adjacency.
@@ -275,6 +285,14 @@ fn xor(into: &mut [u64], from: &[u64]) {
     }
 }
 
+/// A loop: the tree paths from `base` to the ends of `edge`, closed by it.
+struct Candidate {
+    length: f64,
+    class: Vec<u64>,
+    base: u32,
+    edge: u32,
+}
+
 /// A bounded Dijkstra search from one base vertex, with scratch space reused across searches.
 struct Search {
     distance: Vec<f64>,
@@ -327,7 +345,81 @@ impl Search {
         classes: &Classes,
         x: u32,
         max_length: f64,
-    ) -> Vec<(f64, Vec<u64>)> {
+    ) -> Vec<Candidate> {
+        self.grow(graph, classes, x, max_length / 2.0);
+        let w = self.words;
+        let mut found = Vec::new();
+        for &u in &self.settled {
+            for &(v, e) in graph.neighbours(u) {
+                if v < u
+                    || !self.done[v as usize]
+                    || self.parent[u as usize] == e
+                    || self.parent[v as usize] == e
+                {
+                    continue;
+                }
+                let length =
+                    self.distance[u as usize] + graph.length(e) + self.distance[v as usize];
+                if length >= max_length {
+                    continue;
+                }
+                let (pu, pv) = (u as usize * w, v as usize * w);
+                let (cu, cv, ce) = (
+                    &self.path[pu..pu + w],
+                    &self.path[pv..pv + w],
+                    classes.of(e),
+                );
+                if (0..w).any(|k| cu[k] ^ cv[k] ^ ce[k] != 0) {
+                    let class = (0..w).map(|k| cu[k] ^ cv[k] ^ ce[k]).collect();
+                    found.push(Candidate {
+                        length,
+                        class,
+                        base: x,
+                        edge: e,
+                    });
+                }
+            }
+        }
+        found.sort_by(|a, b| a.length.total_cmp(&b.length));
+        let mut basis = Basis::new(classes.bits);
+        found.retain(|c| basis.insert(c.class.clone()));
+        found
+    }
+
+    /// The loop of `candidate` as a simple cycle of vertices: the tree paths from its base to
+    /// the two ends of its edge, without the stretch they share.
+    fn cycle(
+        &mut self,
+        graph: &Graph,
+        classes: &Classes,
+        candidate: &Candidate,
+        max_length: f64,
+    ) -> Vec<u32> {
+        self.grow(graph, classes, candidate.base, max_length / 2.0);
+        let to_base = |mut v: u32| {
+            let mut path = vec![v];
+            while let Some(e) = Some(self.parent[v as usize]).filter(|&e| e != u32::MAX) {
+                let [a, b] = graph.ends[e as usize];
+                v = if a == v { b } else { a };
+                path.push(v);
+            }
+            path
+        };
+        let [u, v] = graph.ends[candidate.edge as usize];
+        let (mut pu, mut pv) = (to_base(u), to_base(v));
+        // Both end at the base: drop the shared stretch but its first vertex.
+        while pu.len() > 1 && pv.len() > 1 && pu[pu.len() - 2] == pv[pv.len() - 2] {
+            pu.pop();
+            pv.pop();
+        }
+        pv.pop();
+        pv.reverse();
+        pu.extend(pv);
+        pu
+    }
+
+    /// Dijkstra from `x` to distance `reach`, with each settled vertex's tree-path class.
+    fn grow(&mut self, graph: &Graph, classes: &Classes, x: u32, reach: f64) {
         let w = self.words;
         for &v in &self.settled {
             let v = v as usize;
@@ -337,7 +429,6 @@ impl Search {
             self.path[v * w..(v + 1) * w].fill(0);
         }
         self.settled.clear();
-        let reach = max_length / 2.0;
         let mut heap = BinaryHeap::new();
         self.distance[x as usize] = 0.0;
         heap.push(Near(0.0, x));
@@ -363,37 +454,6 @@ impl Search {
                 }
             }
         }
-        let mut found = Vec::new();
-        for &u in &self.settled {
-            for &(v, e) in graph.neighbours(u) {
-                if v < u
-                    || !self.done[v as usize]
-                    || self.parent[u as usize] == e
-                    || self.parent[v as usize] == e
-                {
-                    continue;
-                }
-                let length =
-                    self.distance[u as usize] + graph.length(e) + self.distance[v as usize];
-                if length >= max_length {
-                    continue;
-                }
-                let (pu, pv) = (u as usize * w, v as usize * w);
-                let (cu, cv, ce) = (
-                    &self.path[pu..pu + w],
-                    &self.path[pv..pv + w],
-                    classes.of(e),
-                );
-                if (0..w).any(|k| cu[k] ^ cv[k] ^ ce[k] != 0) {
-                    let class: Vec<u64> = (0..w).map(|k| cu[k] ^ cv[k] ^ ce[k]).collect();
-                    found.push((length, class));
-                }
-            }
-        }
-        found.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut basis = Basis::new(classes.bits);
-        found.retain(|(_, class)| basis.insert(class.clone()));
-        found
     }
 }
 
@@ -446,14 +506,14 @@ mod tests {
         let graph = Graph::new(mesh).expect("closed");
         let classes = graph.classes();
         let mut search = Search::new(graph.offsets.len() - 1, classes.words);
-        let mut all: Vec<(f64, Vec<u64>)> = (0..mesh.vertices.len() as u32)
+        let mut all: Vec<Candidate> = (0..mesh.vertices.len() as u32)
             .flat_map(|x| search.loops_through(&graph, &classes, x, f64::INFINITY))
-            .filter(|(l, _)| *l < max_length)
+            .filter(|c| c.length < max_length)
             .collect();
-        all.sort_by(|a, b| a.0.total_cmp(&b.0));
+        all.sort_by(|a, b| a.length.total_cmp(&b.length));
         let mut basis = Basis::new(classes.bits);
         all.into_iter()
-            .filter_map(|(l, c)| basis.insert(c).then_some(l))
+            .filter_map(|c| basis.insert(c.class).then_some(c.length))
             .collect()
     }
 
@@ -482,6 +542,32 @@ mod tests {
         let both = short_loops(&torus, 1.05 * hole).expect("closed");
         assert_eq!(both.lengths.len(), 2, "{:?}", both.lengths);
         assert!((both.lengths[1] - hole).abs() < 1e-9, "{:?}", both.lengths);
+    }
+
+    /// Each loop is a simple cycle of the mesh's edges as long as its length says.
+    #[test]
+    fn the_loops_are_simple_cycles_of_edges() {
+        let mesh = two_tori();
+        let graph = Graph::new(&mesh).expect("closed");
+        let edge = |a: u32, b: u32| {
+            graph
+                .neighbours(a)
+                .iter()
+                .find(|&&(v, _)| v == b)
+                .map(|&(_, e)| graph.length(e))
+        };
+        let loops = short_loops(&mesh, 100.0).expect("closed");
+        assert_eq!(loops.loops.len(), 4);
+        for (cycle, length) in loops.loops.iter().zip(&loops.lengths) {
+            let mut sorted = cycle.clone();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), cycle.len(), "{cycle:?}");
+            let total: f64 = (0..cycle.len())
+                .map(|i| edge(cycle[i], cycle[(i + 1) % cycle.len()]).expect("an edge"))
+                .sum();
+            assert!((total - length).abs() < 1e-9, "{total} vs {length}");
+        }
     }
 
     #[test]

@@ -150,6 +150,7 @@ fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::P
                 p.owner_band = (b > 0.0).then_some(b);
             }
             "min_island" => p.min_island = value.extract().map_err(bad)?,
+            "genus" => p.genus = Some(value.extract().map_err(bad)?),
             other => {
                 return Err(PyValueError::new_err(format!(
                     "unknown parameter '{other}'"
@@ -396,6 +397,8 @@ fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<B
     d.set_item("gaps", c.gaps)?;
     d.set_item("deepest_entry", c.deepest_entry)?;
     d.set_item("thin_loops", c.thin_loops.clone())?;
+    d.set_item("components_joined", r.components_joined)?;
+    d.set_item("handles_cut", r.handles_cut)?;
     d.set_item("warnings", r.warnings.clone())?;
     let timings = PyDict::new(py);
     for (stage, t) in &r.timings {

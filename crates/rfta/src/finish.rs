@@ -99,6 +99,20 @@ pub(crate) fn finish(
         + report.vertices_added;
     report.dents += dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
+    if let Some(genus) = params.genus {
+        let t = Instant::now();
+        (report.components_joined, report.handles_cut) =
+            to_genus(&mut mesh, genus, consistency::spacing(samples));
+        report.timings.push(("topology".into(), t.elapsed()));
+        if let Some(g) = rfta_mesh::Topology::of(&mesh)
+            .genus()
+            .filter(|&g| g < genus as i64)
+        {
+            report.warnings.push(format!(
+                "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
+            ));
+        }
+    }
     crate::pool::waiters_back();
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(&mesh);
@@ -155,6 +169,111 @@ pub(crate) fn finish(
         points,
         report,
     })
+}
+
+/// How far apart the two sides of a cut handle move, in sample spacings.
+const CUT_GAP: f64 = 0.05;
+
+/// [`Params::genus`]: every component joined to the largest, then the shortest loop around a
+/// handle cut until the genus is `genus`; loops are searched below `pi` spacings first, then
+/// below twice and four times that, and so on to 64 spacings. Returns the components joined
+/// and the handles cut.
+fn to_genus(mesh: &mut TriMesh, genus: usize, h: f64) -> (usize, usize) {
+    let mut joined = 0;
+    while let Some((a, b)) = nearest_faces_to_largest(mesh) {
+        if !rfta_mesh::join(mesh, a, b) {
+            break;
+        }
+        joined += 1;
+    }
+    let mut cut = 0;
+    let mut bound = consistency::THIN_LOOP;
+    while rfta_mesh::Topology::of(mesh)
+        .genus()
+        .is_some_and(|g| g > genus as i64)
+        && bound <= 64.0
+    {
+        let Some(loops) = rfta_mesh::short_loops(mesh, bound * h) else {
+            break;
+        };
+        match loops.loops.first() {
+            Some(cycle) => {
+                if !rfta_mesh::cut_along(mesh, cycle, CUT_GAP * h) {
+                    break;
+                }
+                cut += 1;
+            }
+            None => bound *= 2.0,
+        }
+    }
+    (joined, cut)
+}
+
+/// A face of the first component other than the largest (in face order) and the face of the
+/// largest nearest to it: the pair whose points are nearest, the first component's face the
+/// one at its vertex nearest the largest whose centre is nearest. `None` with one component.
+fn nearest_faces_to_largest(mesh: &TriMesh) -> Option<(u32, u32)> {
+    let parts = face_components(mesh);
+    if parts.len() < 2 {
+        return None;
+    }
+    let largest = (0..parts.len()).max_by_key(|&i| (parts[i].len(), std::cmp::Reverse(i)))?;
+    let other = (0..parts.len()).find(|&i| i != largest)?;
+    let main = TriMesh {
+        vertices: mesh.vertices.clone(),
+        faces: parts[largest]
+            .iter()
+            .map(|&f| mesh.faces[f as usize])
+            .collect(),
+    };
+    let index = rfta_mesh::MeshIndex::new(&main).ok()?;
+    let mut best: Option<(f64, u32, rfta_mesh::ClosestPoint)> = None;
+    for &f in &parts[other] {
+        for &v in &mesh.faces[f as usize] {
+            let q = index.closest_point(mesh.vertices[v as usize]);
+            if best.as_ref().is_none_or(|b| q.distance_squared < b.0) {
+                best = Some((q.distance_squared, v, q));
+            }
+        }
+    }
+    let (_, v, q) = best?;
+    let centre = |f: u32| {
+        mesh.faces[f as usize]
+            .iter()
+            .map(|&i| mesh.vertices[i as usize])
+            .sum::<DVec3>()
+            / 3.0
+    };
+    let a = parts[other]
+        .iter()
+        .copied()
+        .filter(|&f| mesh.faces[f as usize].contains(&v))
+        .min_by(|&f, &g| {
+            centre(f)
+                .distance_squared(q.point)
+                .total_cmp(&centre(g).distance_squared(q.point))
+        })?;
+    Some((a, parts[largest][q.face as usize]))
+}
+
+/// The faces of each connected component (faces sharing a vertex), in face order.
+fn face_components(mesh: &TriMesh) -> Vec<Vec<u32>> {
+    let mut sets = rfta_mesh::UnionFind::new(mesh.vertices.len());
+    for f in &mesh.faces {
+        sets.union(f[0] as usize, f[1] as usize);
+        sets.union(f[0] as usize, f[2] as usize);
+    }
+    let mut index_of = std::collections::HashMap::new();
+    let mut parts: Vec<Vec<u32>> = Vec::new();
+    for (i, f) in mesh.faces.iter().enumerate() {
+        let root = sets.find(f[0] as usize);
+        let k = *index_of.entry(root).or_insert_with(|| {
+            parts.push(Vec::new());
+            parts.len() - 1
+        });
+        parts[k].push(i as u32);
+    }
+    parts
 }
 
 /// Samples this close to the surface (in spacings) are the ones [`dent_wrong_side`] looks at.

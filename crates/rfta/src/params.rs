@@ -73,6 +73,14 @@ pub struct Params {
     /// leaves small islands around its inside samples or between them where the samples' spheres
     /// touch it, and those stay. Size alone removes nothing. Default 2.
     pub min_island: f64,
+    /// The shape's genus, when the caller knows it (a scanned organ: 0): the output is made one
+    /// surface of at most this genus. Every other component is joined to the largest by a tube
+    /// between their nearest faces, and while the genus is higher the shortest loop around a
+    /// handle is cut and both sides capped (`rfta_mesh::short_loops`, `rfta_mesh::cut_along`),
+    /// thinnest handle first: a bar cut through, or a tunnel filled. Handles the mesh lacks are
+    /// not added. `None` (the default): the topology is the reconstruction's; handles thinner
+    /// than the samples resolve are reported ([`crate::Consistency::thin_loops`]).
+    pub genus: Option<usize>,
 }
 
 impl Default for Params {
@@ -96,6 +104,7 @@ impl Default for Params {
             threads: None,
             owner_band: Some(OWNER_BAND),
             min_island: 2.0,
+            genus: None,
         }
     }
 }

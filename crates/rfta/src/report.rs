@@ -109,6 +109,11 @@ pub struct Report {
     /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
     /// other component around them.
     pub unsupported_removed: usize,
+    /// Components joined to the largest by a tube, and handles cut, to reach
+    /// [`crate::Params::genus`] (0 without it).
+    pub components_joined: usize,
+    /// See `components_joined`.
+    pub handles_cut: usize,
     /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
     pub stopped_early: Option<String>,
     /// Samples that overlap a sample of the other sign (see [`crate::check`]; 0 when not checked).

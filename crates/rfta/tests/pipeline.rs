@@ -559,3 +559,84 @@ fn noisy_values_keep_their_tangency_points() {
     assert!(err(&out.mesh) < 0.01, "{}", err(&out.mesh));
     assert!(err(&clean.mesh) < 0.01, "{}", err(&clean.mesh));
 }
+
+/// Told the genus, the output is one surface of that genus: a torus asked for genus 0 loses its
+/// handle (cut through its tube, the shortest loop: 2 pi 0.2 = 1.3 against 2 pi 0.4 = 2.5 round
+/// the hole) and stays where the torus is; two balls asked for genus 0 are joined into one; a
+/// torus asked for genus 2 stays a torus, with a warning.
+#[test]
+fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
+    let torus = Analytic::Torus {
+        major: 0.6,
+        minor: 0.2,
+    };
+    let samples = grid_samples(torus, 20);
+    let asked = |genus| {
+        reconstruct(
+            &samples,
+            &Params {
+                genus: Some(genus),
+                ..Params::default()
+            },
+        )
+        .expect("reconstruct")
+    };
+    let plain = reconstruct(&samples, &Params::default()).expect("reconstruct");
+    let t = rfta_mesh::Topology::of(&plain.mesh);
+    assert_eq!((t.genus(), t.components), (Some(1), 1));
+    let cut = asked(0);
+    let t = rfta_mesh::Topology::of(&cut.mesh);
+    assert!(t.is_watertight() && t.is_consistently_oriented(), "{t:?}");
+    assert_eq!((t.genus(), t.components), (Some(0), 1));
+    assert_eq!(
+        (cut.report.handles_cut, cut.report.components_joined),
+        (1, 0)
+    );
+    // Every vertex on the torus (within 0.3 spacings, 0.1) but the centres of the two caps,
+    // inside the tube (0.2 deep at its centre line).
+    let off: Vec<f64> = cut
+        .mesh
+        .vertices
+        .iter()
+        .map(|&v| torus.sdf(v))
+        .filter(|d| d.abs() > 0.03)
+        .collect();
+    assert_eq!(off.len(), 2, "{off:?}");
+    assert!(off.iter().all(|&d| (-0.2..-0.1).contains(&d)), "{off:?}");
+    let more = asked(2);
+    assert_eq!(rfta_mesh::Topology::of(&more.mesh).genus(), Some(1));
+    assert_eq!(more.report.handles_cut, 0);
+    assert!(
+        more.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("below the 2 asked")),
+        "{:?}",
+        more.report.warnings
+    );
+
+    let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+    let centres = [DVec3::new(-0.4, 0.0, 0.0), DVec3::new(0.45, 0.0, 0.0)];
+    let values = (0..grid.len())
+        .map(|i| {
+            let p = grid.position(i);
+            centres
+                .iter()
+                .map(|c| p.distance(*c) - 0.3)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    let balls = SdfSamples::grid(grid, values).expect("samples");
+    let one = reconstruct(
+        &balls,
+        &Params {
+            genus: Some(0),
+            ..Params::default()
+        },
+    )
+    .expect("reconstruct");
+    let t = rfta_mesh::Topology::of(&one.mesh);
+    assert!(t.is_watertight() && t.is_consistently_oriented(), "{t:?}");
+    assert_eq!((t.genus(), t.components), (Some(0), 1));
+    assert_eq!(one.report.components_joined, 1);
+}

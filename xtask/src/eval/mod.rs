@@ -2,7 +2,7 @@
 //! the same run, scored against the ground truth, next to the reference results when present.
 //!
 //! ```text
-//! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
+//! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper,rfta-genus]
 //!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
 //!                  [--out DIR]
 //! cargo xtask eval --scenario noise,clamp,scattered,swept,collision,params [--levels L,..] [--inputs DIR] [--quick]
@@ -94,14 +94,16 @@ struct Args {
     res_given: bool,
 }
 
-const METHODS: [&str; 4] = ["mc", "rfta", "rfta-default", "rfta-paper"];
+/// The methods `--methods` takes; all but the last run without it. `rfta-genus` is the default
+/// preset told the ground truth's genus (`rfta::Params::genus`), as a user who knows it would.
+const METHODS: [&str; 5] = ["mc", "rfta", "rfta-default", "rfta-paper", "rfta-genus"];
 
 fn parse(args: &[String]) -> Result<Args> {
     let mut a = Args {
         inputs: None,
         meshes: None,
         res: vec![10, 20, 30],
-        methods: METHODS.iter().map(|m| m.to_string()).collect(),
+        methods: METHODS[..4].iter().map(|m| m.to_string()).collect(),
         samples: 1_000_000,
         tuning: Tuning::default(),
         quick: false,
@@ -315,7 +317,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                 bar.set_message(format!("{} n={n} {method}", shape.name));
                 let t = Instant::now();
                 let cpu = crate::bench::process_usage().0;
-                let result = run_method(method, &grid, &values, &a.tuning);
+                let result = run_method(method, &grid, &values, &a.tuning, gt_summary.genus);
                 let seconds = t.elapsed().as_secs_f64();
                 let cpu_seconds = crate::bench::process_usage().0 - cpu;
                 let row = match result {
@@ -426,14 +428,23 @@ fn run_method(
     grid: &Grid,
     values: &[f64],
     tuning: &Tuning,
+    gt_genus: Option<i64>,
 ) -> Result<TriMesh, String> {
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
-        "rfta" | "rfta-default" | "rfta-paper" => {
+        "rfta" | "rfta-default" | "rfta-paper" | "rfta-genus" => {
             // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults.
             let base = match method {
                 "rfta" => rfta::Params::fast(),
                 "rfta-default" => rfta::Params::default(),
+                "rfta-genus" => rfta::Params {
+                    genus: Some(
+                        gt_genus
+                            .and_then(|g| usize::try_from(g).ok())
+                            .ok_or("rfta-genus needs the ground truth's genus")?,
+                    ),
+                    ..rfta::Params::default()
+                },
                 _ => rfta::Params::paper_table(),
             };
             let params = rfta::Params {

@@ -78,7 +78,7 @@ pub(crate) fn read_reference(path: &Path) -> Reference {
 /// goal is stated in.
 fn reference_method(m: &str) -> String {
     match m {
-        "rfta-default" => "rfta".into(),
+        "rfta-default" | "rfta-genus" => "rfta".into(),
         other => other.into(),
     }
 }

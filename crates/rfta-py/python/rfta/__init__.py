@@ -183,6 +183,7 @@ def reconstruct(
     owner_band: Optional[float] = None,
     raster_resolution: Optional[int] = None,
     min_island: Optional[float] = None,
+    genus: Optional[int] = None,
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
     verbose: bool = False,
@@ -202,7 +203,7 @@ def reconstruct(
     points : (n, 3) array, optional
         Scattered sample positions (``S`` then has shape (n,)).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
-    raster_resolution, min_island, threads
+    raster_resolution, min_island, genus, threads
         As ``rfta reconstruct``'s options of the same names (``rfta reconstruct --help``).
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
@@ -234,6 +235,7 @@ def reconstruct(
         owner_band=owner_band,
         raster_resolution=raster_resolution,
         min_island=min_island,
+        genus=genus,
         threads=threads,
     )
     V, F, P, N, report = _run(
