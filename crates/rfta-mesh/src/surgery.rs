@@ -98,7 +98,9 @@ pub fn cut_along(mesh: &mut TriMesh, cycle: &[u32], gap: f64) -> bool {
 
 /// Joins two faces of different components by a tube: both faces are removed and their
 /// boundaries connected by six triangles, each vertex of `a` paired with a vertex of `b` so
-/// that the tube's edges are shortest. One component fewer, the genus the sum of the two.
+/// that the tube's edges are shortest. One component fewer, the genus the sum of the two. Two
+/// of the tube's faces take the indices of `a` and `b`, the other four are appended: the other
+/// faces keep theirs.
 /// Returns whether it joined: not when a face index is out of range or the faces share a vertex.
 pub fn join(mesh: &mut TriMesh, a: u32, b: u32) -> bool {
     let n = mesh.faces.len();
@@ -127,10 +129,11 @@ pub fn join(mesh: &mut TriMesh, a: u32, b: u32) -> bool {
         tube.push([a0, a1, b1]);
         tube.push([a0, b1, b0]);
     }
-    let (hi, lo) = (a.max(b) as usize, a.min(b) as usize);
-    mesh.faces.swap_remove(hi);
-    mesh.faces.swap_remove(lo);
-    mesh.faces.extend(tube);
+    // The tube's first two faces take the removed faces' places: every other face keeps its
+    // index, so several joins can be planned on one mesh.
+    mesh.faces[a as usize] = tube[0];
+    mesh.faces[b as usize] = tube[1];
+    mesh.faces.extend_from_slice(&tube[2..]);
     true
 }
 
