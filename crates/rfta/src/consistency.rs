@@ -65,7 +65,8 @@ pub struct Consistency {
     pub deepest_entry: f64,
     /// The lengths, in spacings and ascending, of a shortest set of independent loops around the
     /// mesh's handles that are shorter than [`THIN_LOOP`] spacings (a handle thin one way has
-    /// one, a handle small both ways two); empty when the mesh has none or is not closed.
+    /// one, a handle small both ways two); empty when the mesh has none, is not closed, or has a
+    /// genus above [`THIN_LOOP_MAX_GENUS`].
     pub thin_loops: Vec<f64>,
 }
 
@@ -171,9 +172,16 @@ pub(crate) fn measure_with(
     })
 }
 
+/// Above this genus [`Consistency::thin_loops`] is not searched: the search keeps a class of
+/// `2 genus` bits per edge (64 bytes per edge here).
+pub const THIN_LOOP_MAX_GENUS: i64 = 256;
+
 /// [`Consistency::thin_loops`]: only a closed surface with handles has loops to find.
 fn thin_loops(mesh: &TriMesh, topology: &Topology, h: f64) -> Vec<f64> {
-    if topology.genus().is_none_or(|g| g == 0) {
+    if topology
+        .genus()
+        .is_none_or(|g| g == 0 || g > THIN_LOOP_MAX_GENUS)
+    {
         return Vec::new();
     }
     rfta_mesh::short_loops(mesh, THIN_LOOP * h)

@@ -104,13 +104,15 @@ pub(crate) fn finish(
         (report.components_joined, report.handles_cut) =
             to_genus(&mut mesh, genus, consistency::spacing(samples));
         report.timings.push(("topology".into(), t.elapsed()));
-        if let Some(g) = rfta_mesh::Topology::of(&mesh)
-            .genus()
-            .filter(|&g| g < genus as i64)
-        {
-            report.warnings.push(format!(
+        match rfta_mesh::Topology::of(&mesh).genus() {
+            Some(g) if g < genus as i64 => report.warnings.push(format!(
                 "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
-            ));
+            )),
+            Some(g) if g > genus as i64 => report.warnings.push(format!(
+                "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
+                consistency::THIN_LOOP_MAX_GENUS
+            )),
+            _ => {}
         }
     }
     crate::pool::waiters_back();
@@ -176,8 +178,8 @@ const CUT_GAP: f64 = 0.05;
 
 /// [`Params::genus`]: every component joined to the largest, then the shortest loops around
 /// handles cut until the genus is `genus`; loops are searched below `pi` spacings first, then
-/// below twice and four times that, and so on to 64 spacings. Returns the components joined
-/// and the handles cut.
+/// below twice and four times that, and so on to 64 spacings, on meshes of genus up to
+/// [`consistency::THIN_LOOP_MAX_GENUS`]. Returns the components joined and the handles cut.
 fn to_genus(mesh: &mut TriMesh, genus: usize, h: f64) -> (usize, usize) {
     let mut joined = 0;
     for (a, b) in nearest_faces_to_largest(mesh) {
@@ -190,6 +192,7 @@ fn to_genus(mesh: &mut TriMesh, genus: usize, h: f64) -> (usize, usize) {
     while bound <= 64.0 {
         let Some(excess) = rfta_mesh::Topology::of(mesh)
             .genus()
+            .filter(|&g| g <= consistency::THIN_LOOP_MAX_GENUS)
             .and_then(|g| usize::try_from(g).ok())
             .and_then(|g| g.checked_sub(genus))
             .filter(|&e| e > 0)
