@@ -247,10 +247,7 @@ fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
     }
     let main = TriMesh {
         vertices: mesh.vertices.clone(),
-        faces: parts[largest]
-            .iter()
-            .map(|&f| mesh.faces[f as usize])
-            .collect(),
+        faces: parts[largest].iter().map(|&f| mesh.faces[f]).collect(),
     };
     let Ok(index) = rfta_mesh::MeshIndex::new(&main) else {
         return Vec::new();
@@ -269,7 +266,7 @@ fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
         }
         let mut best: Option<(u32, rfta_mesh::ClosestPoint)> = None;
         for &f in part {
-            for &v in &mesh.faces[f as usize] {
+            for &v in &mesh.faces[f] {
                 let q = index.closest_point(mesh.vertices[v as usize]);
                 if best
                     .as_ref()
@@ -282,7 +279,7 @@ fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
         let Some((v, q)) = best else { continue };
         let a = part
             .iter()
-            .copied()
+            .map(|&f| f as u32)
             .filter(|&f| mesh.faces[f as usize].contains(&v))
             .min_by(|&f, &g| {
                 centre(f)
@@ -290,28 +287,29 @@ fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
                     .total_cmp(&centre(g).distance_squared(q.point))
             });
         if let Some(a) = a {
-            pairs.push((a, parts[largest][q.face as usize]));
+            pairs.push((a, parts[largest][q.face as usize] as u32));
         }
     }
     pairs
 }
 
-/// The faces of each connected component (faces sharing a vertex), in face order.
-fn face_components(mesh: &TriMesh) -> Vec<Vec<u32>> {
+/// The faces of each connected component (faces sharing a vertex), components in the order of
+/// their first face.
+fn face_components(mesh: &TriMesh) -> Vec<Vec<usize>> {
     let mut sets = rfta_mesh::UnionFind::new(mesh.vertices.len());
     for f in &mesh.faces {
         sets.union(f[0] as usize, f[1] as usize);
         sets.union(f[0] as usize, f[2] as usize);
     }
     let mut index_of = std::collections::HashMap::new();
-    let mut parts: Vec<Vec<u32>> = Vec::new();
+    let mut parts: Vec<Vec<usize>> = Vec::new();
     for (i, f) in mesh.faces.iter().enumerate() {
         let root = sets.find(f[0] as usize);
         let k = *index_of.entry(root).or_insert_with(|| {
             parts.push(Vec::new());
             parts.len() - 1
         });
-        parts[k].push(i as u32);
+        parts[k].push(i);
     }
     parts
 }
@@ -1072,40 +1070,16 @@ fn remove_islands(
     verdict: impl Fn(&[usize], Aabb, &[usize]) -> Option<Island>,
 ) -> (TriMesh, [usize; 2]) {
     let n = mesh.vertices.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn root(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
-    for f in &mesh.faces {
-        let a = root(&mut parent, f[0]);
-        for &v in &f[1..] {
-            let b = root(&mut parent, v);
-            if a != b {
-                parent[b as usize] = a;
-            }
-        }
-    }
-    let roots: Vec<u32> = mesh.faces.iter().map(|f| root(&mut parent, f[0])).collect();
-    // Faces and bounds per component, components in order of their first face.
-    let mut component_of = vec![u32::MAX; n];
-    let mut faces_of: Vec<Vec<usize>> = Vec::new();
-    let mut bounds: Vec<Aabb> = Vec::new();
-    for (f, &r) in roots.iter().enumerate() {
-        if component_of[r as usize] == u32::MAX {
-            component_of[r as usize] = faces_of.len() as u32;
-            faces_of.push(Vec::new());
-            bounds.push(Aabb::EMPTY);
-        }
-        let c = component_of[r as usize] as usize;
-        faces_of[c].push(f);
-        for &v in &mesh.faces[f] {
-            bounds[c] = bounds[c].grow(mesh.vertices[v as usize]);
-        }
-    }
+    let faces_of = face_components(mesh);
+    let bounds: Vec<Aabb> = faces_of
+        .iter()
+        .map(|faces| {
+            faces
+                .iter()
+                .flat_map(|&f| mesh.faces[f])
+                .fold(Aabb::EMPTY, |b, v| b.grow(mesh.vertices[v as usize]))
+        })
+        .collect();
     let mut removed = [0usize; 2];
     if faces_of.len() < 2 {
         return (mesh.clone(), removed);
@@ -1142,8 +1116,14 @@ fn remove_islands(
     let mut remap = vec![u32::MAX; n];
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
-    for (f, &r) in mesh.faces.iter().zip(&roots) {
-        if !keep[component_of[r as usize] as usize] {
+    let mut kept = vec![false; mesh.faces.len()];
+    for (c, faces) in faces_of.iter().enumerate() {
+        for &f in faces {
+            kept[f] = keep[c];
+        }
+    }
+    for (f, &k) in mesh.faces.iter().zip(&kept) {
+        if !k {
             continue;
         }
         let g = f.map(|v| {
