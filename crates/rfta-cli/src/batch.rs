@@ -930,6 +930,8 @@ mod tests {
             "64",
             "--depth",
             "7",
+            "--genus",
+            "0",
         ])
         .expect("options");
         let mut given: Vec<String> = cli.args.checks.to_args(None);

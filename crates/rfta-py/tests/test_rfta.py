@@ -110,6 +110,18 @@ def test_same_mesh_as_the_cli(tmp_path):
     assert np.array_equal(r.faces, F)
 
 
+def test_a_known_genus_cuts_the_torus_and_the_report_says_so():
+    S = torus_sdf(grid(20), R=0.6, r=0.2)
+    plain = rfta.reconstruct(S, bounds=(-1, 1))
+    assert plain.report["handles_cut"] == 0
+    assert plain.report["thin_loops"] == []  # the tube is 4 spacings across
+    cut = rfta.reconstruct(S, bounds=(-1, 1), genus=0)
+    assert cut.report["handles_cut"] == 1
+    assert cut.report["components_joined"] == 0
+    # Euler characteristic 2: a sphere (V - E + F with E = 3F/2 on a closed mesh).
+    assert len(cut.vertices) - len(cut.faces) // 2 == 2
+
+
 def test_float32_and_non_contiguous_input():
     S = torus_sdf(grid(12))
     base = rfta.reconstruct(S, rounds=2)
