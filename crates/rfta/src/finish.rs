@@ -70,23 +70,6 @@ pub(crate) fn finish(
     report
         .timings
         .push(("components judged".into(), t.elapsed()));
-    // A known genus before the spheres are cleared, so that the caps and tubes are cleared too.
-    if let Some(genus) = params.genus {
-        let t = Instant::now();
-        (report.components_joined, report.handles_cut) =
-            to_genus(&mut mesh, genus, consistency::spacing(samples));
-        report.timings.push(("topology".into(), t.elapsed()));
-        match rfta_mesh::Topology::of(&mesh).genus() {
-            Some(g) if g < genus as i64 => report.warnings.push(format!(
-                "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
-            )),
-            Some(g) if g > genus as i64 => report.warnings.push(format!(
-                "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
-                consistency::THIN_LOOP_MAX_GENUS
-            )),
-            _ => {}
-        }
-    }
     crate::pool::waiters_back();
     let t = Instant::now();
     // First radially out of the spheres that own points (near the surface and small, so the
@@ -116,6 +99,22 @@ pub(crate) fn finish(
         + report.vertices_added;
     report.dents += dent_wrong_side(&mut mesh, samples);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
+    if let Some(genus) = params.genus {
+        let t = Instant::now();
+        (report.components_joined, report.handles_cut) =
+            to_genus(&mut mesh, genus, consistency::spacing(samples));
+        report.timings.push(("topology".into(), t.elapsed()));
+        match rfta_mesh::Topology::of(&mesh).genus() {
+            Some(g) if g < genus as i64 => report.warnings.push(format!(
+                "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
+            )),
+            Some(g) if g > genus as i64 => report.warnings.push(format!(
+                "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
+                consistency::THIN_LOOP_MAX_GENUS
+            )),
+            _ => {}
+        }
+    }
     crate::pool::waiters_back();
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(&mesh);
