@@ -408,6 +408,7 @@ fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result
         "gaps": c.gaps,
         "deepest_entry": c.deepest_entry,
         "thin_loops": c.thin_loops,
+        "cavities": r.cavities,
         "warnings": r.warnings,
         "stopped_early": r.stopped_early,
     });

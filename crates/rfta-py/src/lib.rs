@@ -399,6 +399,7 @@ fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<B
     d.set_item("thin_loops", c.thin_loops.clone())?;
     d.set_item("components_joined", r.components_joined)?;
     d.set_item("handles_cut", r.handles_cut)?;
+    d.set_item("cavities", r.cavities)?;
     d.set_item("warnings", r.warnings.clone())?;
     let timings = PyDict::new(py);
     for (stage, t) in &r.timings {

@@ -115,6 +115,10 @@ pub(crate) fn finish(
             _ => {}
         }
     }
+    report.cavities = face_components(&mesh)
+        .iter()
+        .filter(|faces| signed_volume(&mesh, faces) < 0.0)
+        .count();
     crate::pool::waiters_back();
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(&mesh);
@@ -131,6 +135,13 @@ pub(crate) fn finish(
             c.entered,
             consistency::ENTER_MARGIN,
             c.deepest_entry
+        ));
+    }
+    if report.cavities > 0 {
+        report.warnings.push(format!(
+            "the mesh encloses {} cavit{} around samples outside the shape: unless the shape is hollow there, a hole or a gap the surface closed around them, which finer samples can open",
+            report.cavities,
+            if report.cavities == 1 { "y" } else { "ies" }
         ));
     }
     if let Some(&shortest) = c.thin_loops.first() {
@@ -900,6 +911,18 @@ enum Island {
     Unsupported,
 }
 
+/// The divergence theorem over some faces (`TriMesh::signed_volume` of a part): negative for a
+/// closed component that faces inward, a cavity.
+fn signed_volume(mesh: &TriMesh, faces: &[usize]) -> f64 {
+    faces
+        .iter()
+        .map(|&f| {
+            let [a, b, c] = mesh.triangle(f);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
 /// Whether the component `faces` of `mesh` faces inward (negative volume) and no other component
 /// encloses it: a cavity with no solid around it, which no bounded set of samples describes. With
 /// few samples away from the surface, screened Poisson can close such a shell far out in its box.
@@ -908,15 +931,7 @@ fn inverted_and_unenclosed(
     faces: &[usize],
     whole: &OnceLock<Option<rfta_mesh::MeshIndex>>,
 ) -> bool {
-    // The divergence theorem over the component's faces (`TriMesh::signed_volume` of a part).
-    let volume: f64 = faces
-        .iter()
-        .map(|&f| {
-            let [a, b, c] = mesh.triangle(f);
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum();
-    if volume >= 0.0 {
+    if signed_volume(mesh, faces) >= 0.0 {
         return false;
     }
     let Some(&first) = faces.first() else {

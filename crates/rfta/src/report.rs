@@ -109,6 +109,10 @@ pub struct Report {
     /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
     /// other component around them.
     pub unsupported_removed: usize,
+    /// Closed components of the output that face inward: cavities in the solid, each around
+    /// samples outside the shape (the island rule keeps no other). Unless the shape is hollow
+    /// there, a hole or a gap the surface closed; a warning says so.
+    pub cavities: usize,
     /// Components joined to the largest by a tube, and handles cut, to reach
     /// [`crate::Params::genus`] (0 without it).
     pub components_joined: usize,

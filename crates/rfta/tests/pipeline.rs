@@ -640,3 +640,40 @@ fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
     assert_eq!((t.genus(), t.components), (Some(0), 1));
     assert_eq!(one.report.components_joined, 1);
 }
+
+/// A ball with a bubble in it (0.3 across, 3 spacings) comes out with the bubble as a cavity,
+/// counted and warned about; the plain ball has none.
+#[test]
+fn a_cavity_is_counted_and_warned_about() {
+    let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+    let centre = DVec3::new(0.1, 0.0, 0.0);
+    let sdf = |bubble: bool| {
+        let values = (0..grid.len())
+            .map(|i| {
+                let p = grid.position(i);
+                let ball = p.length() - 0.6;
+                if bubble {
+                    ball.max(0.15 - p.distance(centre))
+                } else {
+                    ball
+                }
+            })
+            .collect();
+        SdfSamples::grid(grid, values).expect("samples")
+    };
+    let hollow = reconstruct(&sdf(true), &Params::default()).expect("reconstruct");
+    assert_eq!(hollow.report.cavities, 1);
+    assert_eq!(hollow.report.mesh.components, 2);
+    assert!(
+        hollow
+            .report
+            .warnings
+            .iter()
+            .any(|w| w.contains("1 cavity")),
+        "{:?}",
+        hollow.report.warnings
+    );
+    let solid = reconstruct(&sdf(false), &Params::default()).expect("reconstruct");
+    assert_eq!(solid.report.cavities, 0);
+    assert!(solid.report.warnings.iter().all(|w| !w.contains("cavit")));
+}

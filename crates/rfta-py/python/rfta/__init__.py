@@ -138,7 +138,8 @@ class Reconstruction:
     report: dict = field(default_factory=dict)
     """What the reconstruction did: counts, agreement with the samples (``sign_errors``,
     ``entered``, ``gaps``; ``thin_loops``, the lengths in spacings of the loops around handles
-    thinner than the samples resolve), ``warnings``, ``timings`` in seconds."""
+    thinner than the samples resolve; ``cavities``, inward-facing components), ``warnings``,
+    ``timings`` in seconds."""
 
     def to_trimesh(self) -> Any:
         """The mesh as a ``trimesh.Trimesh`` (needs the ``trimesh`` package)."""
