@@ -301,6 +301,7 @@ struct Search {
     path: Vec<u64>,
     settled: Vec<u32>,
     done: Vec<bool>,
+    heap: BinaryHeap<Near>,
     words: usize,
 }
 
@@ -332,6 +333,7 @@ impl Search {
             path: vec![0; nv * words],
             settled: Vec::new(),
             done: vec![false; nv],
+            heap: BinaryHeap::new(),
             words,
         }
     }
@@ -398,8 +400,8 @@ impl Search {
         self.grow(graph, classes, candidate.base, max_length / 2.0);
         let to_base = |mut v: u32| {
             let mut path = vec![v];
-            while let Some(e) = Some(self.parent[v as usize]).filter(|&e| e != u32::MAX) {
-                let [a, b] = graph.ends[e as usize];
+            while self.parent[v as usize] != u32::MAX {
+                let [a, b] = graph.ends[self.parent[v as usize] as usize];
                 v = if a == v { b } else { a };
                 path.push(v);
             }
@@ -429,7 +431,8 @@ impl Search {
             self.path[v * w..(v + 1) * w].fill(0);
         }
         self.settled.clear();
-        let mut heap = BinaryHeap::new();
+        // Empty: every search pops until none is left.
+        let heap = &mut self.heap;
         self.distance[x as usize] = 0.0;
         heap.push(Near(0.0, x));
         while let Some(Near(d, v)) = heap.pop() {
@@ -438,7 +441,8 @@ impl Search {
             }
             self.done[v as usize] = true;
             self.settled.push(v);
-            if let Some(e) = Some(self.parent[v as usize]).filter(|&e| e != u32::MAX) {
+            let e = self.parent[v as usize];
+            if e != u32::MAX {
                 let [a, b] = graph.ends[e as usize];
                 let from = if a == v { b } else { a } as usize;
                 let v = v as usize;

@@ -104,16 +104,6 @@ pub(crate) fn finish(
         (report.components_joined, report.handles_cut) =
             to_genus(&mut mesh, genus, consistency::spacing(samples));
         report.timings.push(("topology".into(), t.elapsed()));
-        match rfta_mesh::Topology::of(&mesh).genus() {
-            Some(g) if g < genus as i64 => report.warnings.push(format!(
-                "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
-            )),
-            Some(g) if g > genus as i64 => report.warnings.push(format!(
-                "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
-                consistency::THIN_LOOP_MAX_GENUS
-            )),
-            _ => {}
-        }
     }
     report.cavities = face_components(&mesh)
         .iter()
@@ -127,6 +117,18 @@ pub(crate) fn finish(
     report
         .timings
         .push(("consistency check".into(), t.elapsed()));
+    if let Some(genus) = params.genus {
+        match topology.genus() {
+            Some(g) if g < genus as i64 => report.warnings.push(format!(
+                "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
+            )),
+            Some(g) if g > genus as i64 => report.warnings.push(format!(
+                "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
+                consistency::THIN_LOOP_MAX_GENUS
+            )),
+            _ => {}
+        }
+    }
     let c = &report.consistency;
     if !c.is_consistent() {
         report.warnings.push(format!(

@@ -78,10 +78,15 @@ pub struct Reconstruction2 {
 /// [`Params::threads`]; the 2D screening is [`PLANE_SCREENING`].
 ///
 /// # Errors
-/// [`Error::InvalidParams`], [`Error::NoSurface`] when no circle has a free arc of the side a
+/// [`Error::InvalidParams`] (also when [`Params::genus`] is given), [`Error::NoSurface`] when no circle has a free arc of the side a
 /// curve needs, [`Error::TooFewPoints`], [`Error::ThreadPool`].
 pub fn reconstruct(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     params.validate()?;
+    if let Some(g) = params.genus {
+        return Err(Error::InvalidParams(format!(
+            "genus ({g}) is for surfaces: a 2D reconstruction is closed curves, which have none"
+        )));
+    }
     crate::pool::on_pool(params.threads, || run(samples, params))
 }
 

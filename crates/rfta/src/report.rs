@@ -113,10 +113,11 @@ pub struct Report {
     /// samples outside the shape (the island rule keeps no other). Unless the shape is hollow
     /// there, a hole or a gap the surface closed; a warning says so.
     pub cavities: usize,
-    /// Components joined to the largest by a tube, and handles cut, to reach
-    /// [`crate::Params::genus`] (0 without it).
+    /// Components joined to the largest by a tube to reach [`crate::Params::genus`] (0 without
+    /// it).
     pub components_joined: usize,
-    /// See `components_joined`.
+    /// Handles cut (the loop around each cut and both sides capped) to reach
+    /// [`crate::Params::genus`] (0 without it).
     pub handles_cut: usize,
     /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
     pub stopped_early: Option<String>,

@@ -183,3 +183,18 @@ fn values_that_are_not_a_distance_are_refused_unless_the_check_is_off() {
         Err(rfta::Error::NotADistance(_))
     ));
 }
+
+/// A genus is a surface's: asked of a 2D reconstruction it is refused, not ignored.
+#[test]
+fn a_genus_asked_in_2d_is_refused() {
+    let samples = grid_samples(32, circle);
+    let asked = Params {
+        genus: Some(0),
+        ..Params::default()
+    };
+    assert!(matches!(
+        plane::reconstruct(&samples, &asked),
+        Err(rfta::Error::InvalidParams(m)) if m.contains("genus")
+    ));
+    assert!(plane::reconstruct(&samples, &Params::default()).is_ok());
+}
