@@ -550,12 +550,12 @@ mod tests {
         let tube = 24.0 * 0.03 * (std::f64::consts::PI / 12.0).sin();
         for (n, thin) in [(20, true), (100, false)] {
             let grid = Grid::cube(n, -1.0, 1.0).expect("grid");
+            let shape = rfta_testkit::Analytic::Torus {
+                major: 0.5,
+                minor: 0.03,
+            };
             let values = (0..grid.len())
-                .map(|i| {
-                    let p = grid.position(i);
-                    let ring = (p.x * p.x + p.y * p.y).sqrt() - 0.5;
-                    (ring * ring + p.z * p.z).sqrt() - 0.03
-                })
+                .map(|i| shape.sdf(grid.position(i)))
                 .collect();
             let samples = SdfSamples::grid(grid, values).expect("samples");
             let c = measure(&samples, &torus, None).expect("measure");

@@ -164,12 +164,12 @@ mod tests {
     #[test]
     fn drawing_the_near_spheres_gives_the_points_of_drawing_all() {
         let grid = Grid::cube(40, -1.0, 1.0).expect("grid");
+        let torus = rfta_testkit::Analytic::Torus {
+            major: 0.5,
+            minor: 0.2,
+        };
         let values: Vec<f64> = (0..grid.len())
-            .map(|i| {
-                let p = grid.position(i);
-                let ring = (p.x * p.x + p.y * p.y).sqrt() - 0.5;
-                (ring * ring + p.z * p.z).sqrt() - 0.2
-            })
+            .map(|i| torus.sdf(grid.position(i)))
             .collect();
         let samples = SdfSamples::grid(grid, values).expect("samples");
         let params = Params::default();
