@@ -129,6 +129,17 @@ impl TriMesh {
         }
     }
 
+    /// The number of vertices that no face uses. Every mesh rfta returns or writes has none.
+    pub fn unreferenced_vertices(&self) -> usize {
+        unreferenced(self.vertices.len(), &self.faces)
+    }
+
+    /// Removes the vertices that no face uses, keeping the others in their order (so a mesh
+    /// without any is left exactly as it was); faces are renumbered. Returns how many went.
+    pub fn remove_unreferenced_vertices(&mut self) -> usize {
+        remove_unreferenced(&mut self.vertices, &mut self.faces)
+    }
+
     /// Adds `other`'s vertices and faces (its faces renumbered after this mesh's vertices): the
     /// union of the two as one mesh with separate components.
     pub fn append(&mut self, other: &TriMesh) {
@@ -136,5 +147,95 @@ impl TriMesh {
         self.vertices.extend_from_slice(&other.vertices);
         self.faces
             .extend(other.faces.iter().map(|f| f.map(|v| v + base)));
+    }
+}
+
+/// How many of `n` vertices no element of `elements` names (every index must be below `n`).
+pub(crate) fn unreferenced<const K: usize>(n: usize, elements: &[[u32; K]]) -> usize {
+    let mut used = vec![false; n];
+    for &v in elements.iter().flatten() {
+        used[v as usize] = true;
+    }
+    used.iter().filter(|&&u| !u).count()
+}
+
+/// Drops the vertices that no element names, keeping the rest in order, and renumbers the
+/// elements; the one compaction behind [`TriMesh`] and [`crate::plane::Polylines`]. Returns the
+/// number dropped.
+pub(crate) fn remove_unreferenced<T: Copy, const K: usize>(
+    vertices: &mut Vec<T>,
+    elements: &mut [[u32; K]],
+) -> usize {
+    let mut new_index = vec![u32::MAX; vertices.len()];
+    for &v in elements.iter().flatten() {
+        new_index[v as usize] = 0;
+    }
+    let mut kept = 0u32;
+    for slot in &mut new_index {
+        if *slot == 0 {
+            *slot = kept;
+            kept += 1;
+        }
+    }
+    let removed = vertices.len() - kept as usize;
+    if removed == 0 {
+        return 0;
+    }
+    let mut k = 0;
+    vertices.retain(|_| {
+        k += 1;
+        new_index[k - 1] != u32::MAX
+    });
+    for v in elements.iter_mut().flatten() {
+        *v = new_index[*v as usize];
+    }
+    removed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// Against brute force: the vertices kept are exactly the used ones, in their order, and
+        /// every face has the corners it had.
+        #[test]
+        fn removing_unreferenced_vertices_keeps_every_face_and_the_order(
+            n in 0usize..40,
+            raw in proptest::collection::vec([0u32..1000, 0u32..1000, 0u32..1000], 0..30),
+        ) {
+            let vertices: Vec<DVec3> = (0..n).map(|i| DVec3::new(i as f64, 0.5, -1.0)).collect();
+            let faces: Vec<[u32; 3]> = if n == 0 {
+                Vec::new()
+            } else {
+                raw.iter().map(|f| f.map(|v| v % n as u32)).collect()
+            };
+            let mesh = TriMesh::new(vertices.clone(), faces.clone()).expect("indices in range");
+            let used: Vec<DVec3> = (0..n)
+                .filter(|&i| faces.iter().flatten().any(|&v| v as usize == i))
+                .map(|i| vertices[i])
+                .collect();
+            prop_assert_eq!(mesh.unreferenced_vertices(), n - used.len());
+            let mut compact = mesh.clone();
+            prop_assert_eq!(compact.remove_unreferenced_vertices(), n - used.len());
+            prop_assert_eq!(compact.unreferenced_vertices(), 0);
+            prop_assert_eq!(&compact.vertices, &used);
+            prop_assert_eq!(compact.faces.len(), faces.len());
+            for f in 0..faces.len() {
+                prop_assert_eq!(compact.triangle(f), mesh.triangle(f));
+            }
+            prop_assert!(compact.validate().is_ok());
+        }
+    }
+
+    #[test]
+    fn a_mesh_without_unreferenced_vertices_is_left_as_it_was() {
+        let mut mesh = crate::shapes::icosphere(1.0, 2);
+        let before = mesh.clone();
+        assert_eq!(mesh.remove_unreferenced_vertices(), 0);
+        assert_eq!(mesh, before);
     }
 }

@@ -322,6 +322,17 @@ impl Polylines {
         self.edges.is_empty()
     }
 
+    /// The number of vertices that no edge uses. Every curve rfta returns or writes has none.
+    pub fn unreferenced_vertices(&self) -> usize {
+        crate::mesh::unreferenced(self.vertices.len(), &self.edges)
+    }
+
+    /// Removes the vertices that no edge uses, keeping the others in their order; edges are
+    /// renumbered. Returns how many went.
+    pub fn remove_unreferenced_vertices(&mut self) -> usize {
+        crate::mesh::remove_unreferenced(&mut self.vertices, &mut self.edges)
+    }
+
     /// Total length of the edges.
     pub fn length(&self) -> f64 {
         self.edges.iter().map(|&e| self.segment(e).length()).sum()

@@ -302,8 +302,8 @@ const GAP_WITNESSES_2D: usize = 2;
 /// hole's positive), and fewer than [`GAP_WITNESSES_2D`] samples touch them (within the
 /// consistency margins) while the rest of the curve is farther than the gap margin. Screened
 /// Poisson leaves such loops next to isolated points, a fraction of a spacing across; a thin part
-/// between grid points touches the circles around it and stays. Returns the curve and the number
-/// of loops removed.
+/// between grid points touches the circles around it and stays. Returns the curve, without the
+/// removed loops' vertices, and the number of loops removed.
 fn drop_islands(
     curve: Polylines,
     circles: &[Circle],
@@ -416,13 +416,12 @@ fn drop_islands(
         .filter(|&(_, &k)| k)
         .flat_map(|(e, _)| e.iter().copied())
         .collect();
-    (
-        Polylines {
-            vertices: curve.vertices,
-            edges,
-        },
-        removed,
-    )
+    let mut kept = Polylines {
+        vertices: curve.vertices,
+        edges,
+    };
+    kept.remove_unreferenced_vertices();
+    (kept, removed)
 }
 
 /// Mean distance from each circle's centre to the nearest other centre (the spacing of scattered

@@ -198,3 +198,36 @@ fn a_genus_asked_in_2d_is_refused() {
     ));
     assert!(plane::reconstruct(&samples, &Params::default()).is_ok());
 }
+
+/// A ring 0.24 wide around the circle of radius 0.5, and a 1.2 x 0.6 box: at coarse grids
+/// screened Poisson leaves small loops beside them that the island rule removes.
+fn ring(p: DVec2) -> f64 {
+    (p.length() - 0.5).abs() - 0.12
+}
+
+fn flat_box(p: DVec2) -> f64 {
+    let q = p.abs() - DVec2::new(0.6, 0.3);
+    q.max(DVec2::ZERO).length() + q.x.max(q.y).min(0.0)
+}
+
+#[test]
+fn removed_loops_take_their_vertices_with_them() {
+    // Every output of a sweep of coarse grids uses every vertex it has, and the sweep does
+    // remove loops (so the test sees the rule that used to leave vertices behind).
+    let mut removed = 0;
+    for sdf in [ring as fn(DVec2) -> f64, flat_box, square_with_hole] {
+        for n in 6..=14 {
+            let params = Params {
+                rounds: 3,
+                ..Params::default()
+            };
+            let Ok(out) = plane::reconstruct(&grid_samples(n, sdf), &params) else {
+                continue;
+            };
+            assert_eq!(out.curve.unreferenced_vertices(), 0, "n = {n}");
+            assert!(out.curve.is_closed());
+            removed += out.report.islands_removed;
+        }
+    }
+    assert!(removed > 0, "no loop was removed: the sweep tests nothing");
+}
