@@ -29,7 +29,7 @@ cargo xtask <command>
 
 commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, pytest), shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
+            fresh venv, gpytoolbox's own tests against the drop-in, pytest), shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
   shaders   validate every shaders/*.wgsl with naga
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
@@ -72,8 +72,8 @@ fn main() -> Result<()> {
 }
 
 /// Builds the Python package from `crates/rfta-py` into a fresh virtual environment (pip and
-/// maturin from PyPI) and runs its tests, the CLI comparison against the debug `rfta` the test
-/// step built.
+/// maturin from PyPI), runs gpytoolbox's own tests against the drop-in, then the package's tests,
+/// the CLI comparison against the debug `rfta` the test step built.
 fn python(root: &Path, cargo: &str) -> Result<()> {
     let target =
         std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
@@ -110,6 +110,29 @@ fn python(root: &Path, cargo: &str) -> Result<()> {
         .status()?;
     if !status.success() {
         bail!("cargo build -p rfta-cli failed ({status})");
+    }
+    // gpytoolbox's own tests of `reach_for_the_arcs`, unchanged, against the drop-in: a peer's
+    // code, run from the shared folder beside the repository, never copied into it. Its runner
+    // adds gpytoolbox to the venv, so the side-by-side test below runs too.
+    let peer = rfta_testkit::data_dir()
+        .and_then(|data| {
+            data.parent()
+                .map(|s| s.join("peer-tests/gpytoolbox/run.sh"))
+        })
+        .filter(|p| p.is_file());
+    match peer {
+        Some(script) => {
+            println!("==> gpytoolbox's test_reach_for_the_arcs.py against rfta.reach_for_the_arcs");
+            run(
+                Path::new("bash"),
+                &[&script.display().to_string(), &venv.display().to_string()],
+                &[],
+            )?;
+        }
+        None if std::env::var_os("CI").is_some() => {
+            bail!("../shared/peer-tests/gpytoolbox/run.sh not found; required under CI")
+        }
+        None => println!("SKIPPED gpytoolbox's own tests: ../shared/peer-tests not found"),
     }
     let rfta_bin = target.join("debug").join("rfta");
     run(
@@ -167,7 +190,7 @@ fn ci(root: &Path) -> Result<()> {
             bail!("step '{name}' failed ({status})");
         }
     }
-    println!("==> python: the rfta package built into a fresh venv, then pytest");
+    println!("==> python: the rfta package built into a fresh venv, gpytoolbox's tests, then pytest");
     python(root, &cargo)?;
     println!("==> shaders");
     shaders::run(root)?;

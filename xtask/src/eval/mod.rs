@@ -321,6 +321,14 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                 let seconds = t.elapsed().as_secs_f64();
                 let cpu_seconds = crate::bench::process_usage().0 - cpu;
                 let row = match result {
+                    Ok(mesh) if mesh.unreferenced_vertices() > 0 => failed_row(
+                        shape,
+                        n,
+                        method,
+                        (seconds, cpu_seconds),
+                        gt_summary.genus,
+                        defect(mesh.unreferenced_vertices()),
+                    ),
                     Ok(mesh) if !mesh.is_empty() => {
                         let s = rfta_metrics::MeshSummary::of(&mesh);
                         let index = MeshIndex::new(&mesh)?;
@@ -393,6 +401,30 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     )?;
     render::write_contact_sheet(&out.join("contact_sheet.png"), &renders)?;
     println!("wrote {}", out.display());
+    no_defects(
+        rows.iter()
+            .map(|r| (format!("{} n={} {}", r.shape, r.n, r.method), &r.status)),
+    )
+}
+
+/// The status of an output that is not a valid result whatever its accuracy: `count` vertices
+/// that no face (or edge) uses. Every output the evaluation scores is checked for it.
+pub(crate) fn defect(count: usize) -> String {
+    format!("{DEFECT} {count} unreferenced vertices")
+}
+
+/// How [`defect`]'s statuses begin.
+const DEFECT: &str = "defect:";
+
+/// Fails the run, after its reports are written, when any output had a [`defect`].
+pub(crate) fn no_defects<'a>(rows: impl Iterator<Item = (String, &'a String)>) -> Result<()> {
+    let bad: Vec<String> = rows
+        .filter(|(_, status)| status.starts_with(DEFECT))
+        .map(|(row, status)| format!("{row}: {status}"))
+        .collect();
+    if !bad.is_empty() {
+        bail!("{} output(s) with a defect:\n{}", bad.len(), bad.join("\n"));
+    }
     Ok(())
 }
 

@@ -93,6 +93,17 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
                 };
                 let cpu_seconds = crate::bench::process_usage().0 - cpu;
                 let row = match result {
+                    Ok(curve) if curve.unreferenced_vertices() > 0 => Row2 {
+                        shape: name.clone(),
+                        n,
+                        method,
+                        cpu_seconds,
+                        chamfer: f64::NAN,
+                        hausdorff: f64::NAN,
+                        loops: 0,
+                        gt_loops: gt.loops(),
+                        status: super::defect(curve.unreferenced_vertices()),
+                    },
                     Ok(curve) => Row2 {
                         shape: name.clone(),
                         n,
@@ -152,7 +163,10 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
     let report = report(&rows, &reference_rows(reference, &names));
     std::fs::write(out.join("report.md"), &report)?;
     println!("{report}\nwrote {}", out.display());
-    Ok(())
+    super::no_defects(
+        rows.iter()
+            .map(|r| (format!("{} n={} {}", r.shape, r.n, r.method), &r.status)),
+    )
 }
 
 /// The reference's rows for the shapes evaluated: (method, n) -> (chamfer, cpu, loops right).

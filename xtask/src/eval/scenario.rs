@@ -494,6 +494,10 @@ pub(crate) fn run(
                 let cpu = t.elapsed().as_secs_f64();
                 rows.push(ScenarioRow {
                     collision: collisions(&mc)?,
+                    status: match mc.unreferenced_vertices() {
+                        0 => "ok".into(),
+                        k => super::defect(k),
+                    },
                     ..row("mc", cpu, chamfer(&mc)?)
                 });
                 for &(label, given) in scenario.runs() {
@@ -586,7 +590,14 @@ pub(crate) fn run(
         &ticks,
         &series,
         1,
-    )
+    )?;
+    super::no_defects(rows.iter().map(|r| {
+        let level = scenario.level_label(r.level);
+        (
+            format!("{} n={} {level} {}", r.shape, r.n, r.method),
+            &r.status,
+        )
+    }))
 }
 
 /// Chamfer distance between `gt` and `mesh` (NaN for an empty mesh).
@@ -674,6 +685,10 @@ fn run_rfta(
                     Scenario::Noise => r.radius_scale.map_or(0.0, |s| s.powf(-0.5) - 1.0),
                     Scenario::Clamp => r.clamp.map_or(0.0, |c| c / h),
                     _ => 0.0,
+                },
+                status: match out.mesh.unreferenced_vertices() {
+                    0 => row.status,
+                    k => super::defect(k),
                 },
                 ..row
             };
