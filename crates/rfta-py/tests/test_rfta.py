@@ -10,6 +10,7 @@ import signal
 import subprocess
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -76,7 +77,7 @@ def test_the_drop_in_reconstructs_a_torus_from_gpytoolboxs_meshgrid():
     S = torus_sdf(U)
     V, F = rfta.reach_for_the_arcs(U, S)
     assert V.dtype == np.float64 and V.shape[1] == 3
-    assert F.dtype == np.int64 and F.shape[1] == 3 and F.max() < len(V)
+    assert F.dtype == np.int32 and F.shape[1] == 3 and F.max() < len(V)
     # Vertices on the torus: on average within 2% of the grid spacing (0.1; marching cubes on
     # the same grid: 1.0%), every one within half of it.
     err = np.abs(torus_sdf(V))
@@ -195,7 +196,7 @@ def test_the_drop_in_reconstructs_2d_samples_as_closed_polylines():
     U = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
     S = np.linalg.norm(U - [0.1, 0.0], axis=1) - 0.5
     V, E, P, N = rfta.reach_for_the_arcs(U, S, return_point_cloud=True)
-    assert V.shape[1] == 2 and E.shape[1] == 2 and E.dtype == np.int64
+    assert V.shape[1] == 2 and E.shape[1] == 2 and E.dtype == np.int32
     assert np.abs(np.linalg.norm(V - [0.1, 0.0], axis=1) - 0.5).max() < 0.01
     # Closed: every vertex starts one edge and ends one; counter-clockwise (positive area).
     assert sorted(E[:, 0]) == sorted(E[:, 1])
@@ -208,6 +209,55 @@ def test_no_surface_is_its_own_value_error():
     with pytest.raises(rfta.NoSurfaceError, match="no surface"):
         rfta.reconstruct(np.full((6, 6, 6), 3.0))
     assert issubclass(rfta.NoSurfaceError, ValueError)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_the_drop_in_answers_no_surface_with_empty_arrays(d):
+    # Every sample 5 from a surface that is nowhere: the circles or spheres cover the box.
+    g = np.linspace(0.0, 1.0, 6)
+    U = np.stack(np.meshgrid(*[g] * d), -1).reshape(-1, d)
+    S = np.full(len(U), 5.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # quiet unless verbose
+        V, F = rfta.reach_for_the_arcs(U, S)
+    assert V.shape == (0, d) and V.dtype == np.float64
+    assert F.shape == (0, d) and F.dtype == np.int32
+    with pytest.warns(UserWarning, match="no surface"):
+        V, F, P, N = rfta.reach_for_the_arcs(U, S, return_point_cloud=True, verbose=True)
+    assert V.shape == F.shape == P.shape == N.shape == (0, d)
+    assert P.dtype == N.dtype == np.float64
+
+
+def unreferenced(V, F):
+    used = np.zeros(len(V), bool)
+    used[np.asarray(F).ravel()] = True
+    return int((~used).sum())
+
+
+def test_no_output_has_an_unreferenced_vertex():
+    # 2D: a ring 0.24 wide on coarse grids, where the island rule removes small loops (it used
+    # to leave their vertices behind: gpytoolbox's test of parallel runs measured them).
+    for n in range(7, 16):
+        g = np.linspace(-1.0, 1.0, n)
+        U = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+        S = np.abs(np.linalg.norm(U, axis=1) - 0.5) - 0.12
+        for parallel in (False, True):
+            V, E = rfta.reach_for_the_arcs(U, S, parallel=parallel)
+            assert len(E) and unreferenced(V, E) == 0, (n, parallel)
+    S = torus_sdf(grid(12))
+    r = rfta.reconstruct(S)
+    assert unreferenced(r.vertices, r.faces) == 0
+    V, F = rfta.reach_for_the_arcs(grid(12).reshape(-1, 3), S.ravel())
+    assert unreferenced(V, F) == 0
+    assert unreferenced(*rfta.marching_cubes(S)) == 0
+    assert unreferenced(*rfta.screened_poisson(r.points, r.normals)) == 0
+
+
+def test_the_module_exports_only_its_api():
+    public = {n for n in dir(rfta) if not n.startswith("_")}
+    assert public == set(rfta.__all__) - {"__version__"}
+    assert isinstance(rfta.__version__, str)
+    assert rfta.reconstruct.__module__ == "rfta" and rfta.Reconstruction.__module__ == "rfta"
 
 
 def test_progress_is_reported_and_an_exception_in_it_stops_the_run():

@@ -1,23 +1,4 @@
-"""Reach for the Arcs: triangle meshes from signed distance samples.
-
-Sellán, Ren, Batty and Stein, "Reach For the Arcs: Reconstructing Surfaces from SDFs via Tangent
-Points", SIGGRAPH 2024, implemented in Rust (the rfta repository, crates/rfta-py).
-
-Two ways in:
-
-- ``reach_for_the_arcs(U, S, ...)``: gpytoolbox's function, argument for argument, so that
-  changing the import is the whole migration.
-- ``reconstruct(S, bounds=..., preset="default", ...)``: a grid of values (or scattered samples)
-  in, a ``Reconstruction`` (vertices, faces, tangency points, report) out.
-
-Beside them: ``screened_poisson``, ``marching_cubes``, ``signed_distance``, ``sample_sdf``.
-
-Arrays may be float32 or float64, in any memory layout; results are float64 vertices and int64
-faces. Long calls release the GIL (other Python threads run), stop on Ctrl-C between stages
-(``KeyboardInterrupt``), and raise ``ValueError`` for bad input (``NoSurfaceError``, a
-``ValueError``, when the samples describe no surface) or ``RuntimeError`` with the library's
-message. Results do not depend on the thread count.
-"""
+"""The implementation of the ``rfta`` package's API; import it from ``rfta``."""
 
 from __future__ import annotations
 
@@ -30,19 +11,6 @@ import numpy as np
 
 from . import _rfta
 from ._rfta import NoSurfaceError
-
-__version__: str = _rfta.__version__
-
-__all__ = [
-    "NoSurfaceError",
-    "Reconstruction",
-    "marching_cubes",
-    "reach_for_the_arcs",
-    "reconstruct",
-    "sample_sdf",
-    "screened_poisson",
-    "signed_distance",
-]
 
 Bounds = Union[float, Sequence[float], Sequence[Sequence[float]], None]
 Progress = Callable[[str, int, int], Any]
@@ -314,8 +282,14 @@ def reach_for_the_arcs(
     Returns
     -------
     V : (n, 3) float64 array
-    F : (m, 3) int64 array
+    F : (m, 3) int32 array (gpytoolbox's dtype)
     P, N : (p, 3) float64 arrays, with ``return_point_cloud``: tangency points and normals.
+
+    Samples that describe no surface (all of one sign with spheres that leave no room for one)
+    give V and F of shape (0, 3) ((0, 2) in 2D), as gpytoolbox does, and P and N empty arrays of
+    the same shape where gpytoolbox returns None; a warning says why when ``verbose``.
+    ``reconstruct`` raises ``NoSurfaceError`` instead. Every difference from gpytoolbox:
+    crates/rfta-py/README.md.
 
     In 2D, ``V`` is (n, 2), ``F`` the (m, 2) edges of closed polylines (inside on the left of
     each edge), ``P`` and ``N`` (p, 2); ``screening_weight``, ``batch_size`` and the local
@@ -352,10 +326,19 @@ def reach_for_the_arcs(
         clamp=None if not np.isfinite(clamp_value) else float(clamp_value),
         threads=None if parallel else 1,
     )
-    if U.shape[1] == 2:
-        V, F, P, N = _rfta.reconstruct_2d(S, U, "default", options)
-    else:
-        V, F, P, N, _ = _run(S, U, None, "default", options, _printer(verbose, None))
+    d = U.shape[1]
+    try:
+        if d == 2:
+            V, F, P, N = _rfta.reconstruct_2d(S, U, "default", options)
+        else:
+            V, F, P, N, _ = _run(S, U, None, "default", options, _printer(verbose, None))
+    except NoSurfaceError as e:
+        # gpytoolbox answers samples that describe no surface with an empty mesh.
+        if verbose:
+            warnings.warn(f"rfta: {e}; returning an empty mesh", stacklevel=2)
+        V, F = np.zeros((0, d)), np.zeros((0, d), dtype=np.int32)
+        P, N = np.zeros((0, d)), np.zeros((0, d))
+    F = F.astype(np.int32)
     if return_point_cloud:
         return V, F, P, N
     return V, F

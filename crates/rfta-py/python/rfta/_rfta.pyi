@@ -25,6 +25,17 @@ def reconstruct(
     npt.NDArray[np.float64],
     dict,
 ]: ...
+def reconstruct_2d(
+    values: npt.NDArray[np.float64],
+    positions: npt.NDArray[np.float64],
+    preset: str = "default",
+    options: Optional[dict] = None,
+) -> Tuple[
+    npt.NDArray[np.float64],
+    npt.NDArray[np.int64],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+]: ...
 def screened_poisson(
     points: npt.NDArray[np.float64],
     normals: npt.NDArray[np.float64],
