@@ -473,9 +473,7 @@ impl Runner {
             Ended::TimedOut(after) => {
                 // A killed writer may leave its temporary files (never the outputs).
                 for written in [&output, &report] {
-                    if let Some(tmp) = rfta_io::temp_path(written, child.id()) {
-                        let _ = std::fs::remove_file(tmp);
-                    }
+                    rfta_io::remove_temp_files(written, child.id());
                 }
                 (
                     Status::Timeout,

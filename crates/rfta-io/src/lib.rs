@@ -46,7 +46,7 @@ mod sdf;
 mod stl;
 mod text;
 
-pub use atomic::{temp_path, write_atomic};
+pub use atomic::{remove_temp_files, write_atomic};
 pub use error::{Error, Result};
 pub use npy::{NpyArray, parse_npy, write_npy_f64};
 pub use plane::{Svg, is_sdf_2d, read_polylines, read_sdf_2d, write_polylines, write_svg};
