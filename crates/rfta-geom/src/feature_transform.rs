@@ -20,7 +20,19 @@ impl Grid {
     pub fn nearest_marked(&self, marked: &[bool]) -> Vec<u32> {
         assert_eq!(marked.len(), self.len(), "one mark per grid point");
         let dims = self.dims();
-        let spacing = self.spacing().to_array();
+        // The nearest point does not change with the unit of length. Where a squared spacing
+        // would overflow (spacings of 1e155) or lose precision (1e-200), distances are measured
+        // in the largest spacing instead; other grids keep their own unit (and their ties).
+        let (lo, hi) = (self.spacing().min_element(), self.spacing().max_element());
+        let unit = if (lo * lo).is_normal()
+            && (hi * hi * (dims.iter().max().copied().unwrap_or(1) as f64).powi(2) * 3.0)
+                .is_finite()
+        {
+            1.0
+        } else {
+            hi
+        };
+        let spacing = (self.spacing() / unit).to_array();
         let mut dist: Vec<f64> = marked
             .iter()
             .map(|&m| if m { 0.0 } else { f64::INFINITY })
@@ -34,7 +46,7 @@ impl Grid {
         for axis in 0..3 {
             let n = dims[axis];
             let stride = strides[axis];
-            let w2 = spacing[axis] * spacing[axis];
+            let w2 = (spacing[axis] * spacing[axis]).max(f64::MIN_POSITIVE);
             // Every line along `axis`: its first point runs over the other two axes.
             let (a, b) = match axis {
                 0 => (1, 2),
@@ -156,6 +168,27 @@ mod tests {
                     prop_assert!((d - brute).abs() <= 1e-9 * brute.max(1.0), "{} vs {}", d, brute);
                 }
             }
+        }
+    }
+
+    /// Spacings whose squares overflow or underflow give the answers of the same grid at unit
+    /// spacing (D3 of the hostile test: a grid over 1e155 wide panicked the input check).
+    #[test]
+    fn the_answer_does_not_depend_on_the_scale() {
+        let marks = |n: usize| {
+            (0..n)
+                .map(|i| i % 7 == 3 || i % 11 == 0)
+                .collect::<Vec<_>>()
+        };
+        let unit = Grid::new([5, 6, 7], DVec3::ZERO, DVec3::new(1.0, 0.5, 0.75)).expect("grid");
+        let expected = unit.nearest_marked(&marks(unit.len()));
+        for scale in [1e155, 1e300, 1e-200, 1e-310] {
+            let grid = Grid::new([5, 6, 7], DVec3::ZERO, unit.spacing() * scale).expect("grid");
+            assert_eq!(
+                grid.nearest_marked(&marks(grid.len())),
+                expected,
+                "scale {scale}"
+            );
         }
     }
 

@@ -82,6 +82,10 @@ impl Inspection {
 
 /// Measures how far `samples` are from a signed distance function (see the module docs).
 pub fn inspect(samples: &SdfSamples) -> Inspection {
+    // Every figure is a ratio of lengths: measured at a working scale where no square overflows.
+    if let Some((scaled, _)) = crate::normalize::working_scale(samples) {
+        return inspect(&scaled);
+    }
     let values = samples.values();
     let bounds = samples.bounds();
     let diag = (bounds.max - bounds.min).length();

@@ -186,6 +186,21 @@ pub fn reconstruct_cancellable(
 ) -> Result<Reconstruction> {
     params.validate()?;
     check_memory(samples.len(), params)?;
+    if let Some((scaled, factor)) = normalize::working_scale(samples) {
+        // Reconstructed at a scale of ordinary size, then scaled back (exactly: a power of two).
+        let params = Params {
+            clamp: params.clamp.map(|c| c * factor),
+            ..params.clone()
+        };
+        let mut out = pool::on_pool(params.threads, || run(&scaled, &params, progress, cancel))?;
+        out.mesh.map_vertices(|v| v / factor);
+        for p in &mut out.points.points {
+            *p /= factor;
+        }
+        out.report.clamp = out.report.clamp.map(|c| c / factor);
+        out.report.consistency.spacing /= factor;
+        return Ok(out);
+    }
     pool::on_pool(params.threads, || run(samples, params, progress, cancel))
 }
 

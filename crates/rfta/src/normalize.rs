@@ -195,6 +195,43 @@ pub(crate) fn sample_spacing(samples: &SdfSamples) -> f64 {
     }
 }
 
+/// The samples at a scale where squared distances neither overflow nor underflow, or `None` when
+/// they are at one already (every input of ordinary size). Positions and values are multiplied by
+/// the power of two `factor` that brings the samples' box to a side between 1 and 2: exact in
+/// floating point, so the reconstruction at the working scale, divided by `factor`, is the one
+/// the samples describe. (A box 2e155 wide, or 1e-200, made the input check index past its
+/// arrays and the pipeline's squared distances infinite or zero.)
+pub(crate) fn working_scale(samples: &SdfSamples) -> Option<(SdfSamples, f64)> {
+    /// Box sides between 2^-64 and 2^64 keep every squared distance of the pipeline normal.
+    const LIMIT: i32 = 64;
+    let b = samples.bounds();
+    let extent = (b.max - b.min).max_element().max(
+        samples
+            .values()
+            .iter()
+            .fold(0.0, |m: f64, v| m.max(v.abs())),
+    );
+    if !(extent.is_finite() && extent > 0.0) {
+        return None;
+    }
+    let exponent = extent.log2().floor() as i32;
+    if exponent.abs() <= LIMIT {
+        return None;
+    }
+    let factor = 2f64.powi(-exponent);
+    let values = samples.values().iter().map(|v| v * factor).collect();
+    let scaled = match samples.layout() {
+        rfta_geom::Layout::Grid(g) => {
+            let grid = Grid::new(g.dims(), g.origin() * factor, g.spacing() * factor).ok()?;
+            SdfSamples::grid(grid, values)
+        }
+        rfta_geom::Layout::Scattered(p) => {
+            SdfSamples::scattered(p.iter().map(|&p| p * factor).collect(), values)
+        }
+    };
+    Some((scaled.ok()?, factor))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -677,3 +677,48 @@ fn a_cavity_is_counted_and_warned_about() {
     assert_eq!(solid.report.cavities, 0);
     assert!(solid.report.warnings.iter().all(|w| !w.contains("cavit")));
 }
+
+/// The same torus at any scale: a grid 2^200 or 2^-200 times as large gives the unit-scale mesh
+/// times that factor, exactly (a power of two); at 1e155 and 1e-200 (values rounded differently)
+/// a watertight torus on the surface. Squared distances of such coordinates overflow or
+/// underflow: the input check indexed past its arrays (a panic) or refused the samples.
+#[test]
+fn the_mesh_does_not_depend_on_the_unit_of_length() {
+    let torus = Analytic::Torus {
+        major: 0.5,
+        minor: 0.2,
+    };
+    let unit = grid_samples(torus, 12);
+    let params = Params {
+        rounds: 2,
+        ..Params::default()
+    };
+    let expected = reconstruct(&unit, &params).expect("unit scale").mesh;
+    let g = *unit.as_grid().expect("grid");
+    for scale in [2f64.powi(200), 2f64.powi(-200), 1e155, 1e-200] {
+        let grid = Grid::new(g.dims(), g.origin() * scale, g.spacing() * scale).expect("grid");
+        let values = unit.values().iter().map(|v| v * scale).collect();
+        let samples = SdfSamples::grid(grid, values).expect("samples");
+        assert!(
+            rfta::check::inspect(&samples).worst.is_none(),
+            "scale {scale}"
+        );
+        let out = reconstruct(&samples, &params).expect("a mesh");
+        let mut mesh = out.mesh;
+        mesh.map_vertices(|v| v / scale);
+        if scale.log2().fract() == 0.0 {
+            assert!(mesh == expected, "scale {scale}: not the unit-scale mesh");
+        } else {
+            assert!(out.report.mesh.watertight && out.report.mesh.components == 1);
+            let worst = mesh
+                .vertices
+                .iter()
+                .map(|&v| torus.sdf(v).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 0.05,
+                "scale {scale}: a vertex {worst} off the torus"
+            );
+        }
+    }
+}
