@@ -242,12 +242,16 @@ fn values_that_are_not_distances_are_refused_unless_the_check_is_off() {
 fn degenerate_grids_are_clear_errors_or_meshes() {
     let dir = temp("tiny");
     let out = dir.join("out.obj");
+    // Shape (2, 1, 1): a flat grid is no volume (D6 of the hostile test: a one-sample axis got
+    // an invented spacing and a "watertight" mesh).
     let (code, err) = reconstruct("grid_2.npy", &out, &[]);
     assert_eq!(code, 1, "{err}");
     assert!(
-        err.contains("only 2 of 2 spheres admit a tangency point"),
+        err.contains("a 3D grid needs at least 2 points along every axis")
+            && err.contains("has 1 along axis 1"),
         "{err}"
     );
+    assert!(!out.exists());
     let (code, err) = reconstruct("single_negative.npy", &out, &[]);
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("only 1 of 2197 spheres"), "{err}");

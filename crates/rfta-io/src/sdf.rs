@@ -259,6 +259,22 @@ fn resolve_grid(
         path: path.to_path_buf(),
         source,
     };
+    // A volume needs two points along every axis: a flat slice has no spacing across it, and
+    // closing it into a "watertight" mesh would invent one. (A single sample is left to the
+    // sample count's own error.)
+    if dims.iter().product::<usize>() >= 2
+        && let Some(axis) = dims.iter().position(|&d| d < 2)
+    {
+        return Err(Error::Parse {
+            path: path.to_path_buf(),
+            line: None,
+            detail: format!(
+                "a 3D grid needs at least 2 points along every axis, but shape {dims:?} has {} along \
+                 axis {axis} (a 2D grid is an (nx, ny) array)",
+                dims[axis]
+            ),
+        });
+    }
     if let Some(b) = bounds {
         return Ok((
             Grid::from_bounds(dims, b.min, b.max).map_err(geom)?,
@@ -298,6 +314,27 @@ fn resolve_grid(
                 });
             }
         };
+        // A file that carries its own bounds (EXR) and a sidecar that says otherwise: one of them
+        // is stale (a sidecar left from an older `.npy` of the same name), and which is not ours
+        // to guess.
+        if let Some((origin, spacing)) = from_file {
+            let close = |a: DVec3, b: DVec3| {
+                (a - b).abs().max_element() <= 1e-9 * a.abs().max(b.abs()).max_element().max(1e-300)
+            };
+            if !(close(origin, grid.origin()) && close(spacing, grid.spacing())) {
+                return Err(Error::Parse {
+                    path: side,
+                    line: None,
+                    detail: format!(
+                        "this sidecar (origin {}, spacing {}) disagrees with {}'s own attributes \
+                         (origin {origin}, spacing {spacing}); remove the stale one or pass --bounds",
+                        grid.origin(),
+                        grid.spacing(),
+                        path.display()
+                    ),
+                });
+            }
+        }
         return Ok((grid, "sidecar"));
     }
     if let Some((origin, spacing)) = from_file {
