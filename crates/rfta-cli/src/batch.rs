@@ -36,7 +36,7 @@ pub(crate) struct Args {
     jobs: u32,
     /// Stop a row after this many seconds (status `timeout`); the others go on.
     #[arg(long, value_name = "SECS", value_parser = parse_seconds)]
-    timeout: Option<f64>,
+    timeout: Option<Duration>,
     /// The shard's status CSV (default: beside the manifest, MANIFEST.shard-I-of-N.status.csv).
     /// With --merge: where the merged table goes (default: merged.status.csv beside the first).
     #[arg(long, value_name = "FILE")]
@@ -86,9 +86,12 @@ fn parse_shard(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
-fn parse_seconds(s: &str) -> Result<f64, String> {
+/// A positive number of seconds that a [`Duration`] holds (up to about 5.8e11 years; 1e20 s
+/// does not fit, and converting it panicked: hostile test D8).
+fn parse_seconds(s: &str) -> Result<Duration, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) if v.is_finite() && v > 0.0 => Duration::try_from_secs_f64(v)
+            .map_err(|_| format!("'{s}' seconds is longer than a timeout can be")),
         _ => Err(format!("'{s}' is not a positive number of seconds")),
     }
 }
@@ -184,6 +187,10 @@ impl StatusRow {
     }
 
     fn parse(fields: &[String], columns: &HashMap<String, usize>) -> Option<Self> {
+        // A line cut short (a killed shard) is no record: its row runs again.
+        if fields.len() != columns.len() {
+            return None;
+        }
         let get = |name: &str| columns.get(name).and_then(|&i| fields.get(i)).cloned();
         Some(Self {
             row: get("row")?.parse().ok()?,
@@ -229,16 +236,7 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let jobs: Vec<Job> = read_manifest(manifest)?
-        .into_iter()
-        .filter(|j| args.shard.takes(j.row))
-        .collect();
-    if args.dry_run {
-        for j in &jobs {
-            crate::ui::print_line(&format!("{},{},{}", j.row, j.input, j.output))?;
-        }
-        return Ok(());
-    }
+    let all = read_manifest(manifest)?;
     let status_path = args.status.clone().unwrap_or_else(|| {
         let stem = manifest
             .file_stem()
@@ -248,6 +246,28 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
             args.shard.index, args.shard.count
         ))
     });
+    // Every row of the manifest, whichever shard runs it: two rows writing one output, or an
+    // output that is an input, the manifest or the status file, would lose data.
+    let mut files = crate::paths::Files::new();
+    files
+        .read("the manifest", manifest)
+        .write("the status file", &status_path);
+    for j in all.iter().filter(|j| j.extra.is_ok()) {
+        files
+            .read_sdf(format!("row {}'s input", j.row), &base.join(&j.input))
+            .write_creating_folder(format!("row {}'s output", j.row), &base.join(&j.output));
+    }
+    files.check()?;
+    let jobs: Vec<Job> = all
+        .into_iter()
+        .filter(|j| args.shard.takes(j.row))
+        .collect();
+    if args.dry_run {
+        for j in &jobs {
+            crate::ui::print_line(&format!("{},{},{}", j.row, j.input, j.output))?;
+        }
+        return Ok(());
+    }
     // Rows an earlier run of this shard finished: kept (as `skipped`), the file rewritten with
     // them only, then this run's rows appended as they finish.
     let done = earlier_rows(&status_path, base)?;
@@ -284,7 +304,7 @@ pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
         threads: per_row,
         checks: args.checks.clone(),
         tuning: args.tuning.clone(),
-        timeout: args.timeout.map(Duration::from_secs_f64),
+        timeout: args.timeout,
     };
     let bar = ui.progress(jobs.len() as u64, "batch");
     bar.inc(done.len() as u64);
@@ -564,11 +584,18 @@ fn read_manifest(path: &Path) -> Result<Vec<Job>> {
             path.display()
         ),
     };
-    let columns: HashMap<String, usize> = split_csv(&head)
-        .into_iter()
-        .enumerate()
-        .map(|(i, c)| (c.trim().to_ascii_lowercase(), i))
-        .collect();
+    // A spreadsheet's UTF-8 byte order mark is not part of the first column's name.
+    let head = head.strip_prefix('\u{feff}').unwrap_or(&head);
+    let mut columns: HashMap<String, usize> = HashMap::new();
+    for (i, c) in split_csv(head).into_iter().enumerate() {
+        let name = c.trim().to_ascii_lowercase();
+        if columns.insert(name.clone(), i).is_some() {
+            bail!(
+                "{}: the header names the column '{name}' twice",
+                path.display()
+            );
+        }
+    }
     for needed in ["input", "output"] {
         if !columns.contains_key(needed) {
             bail!(
@@ -610,6 +637,13 @@ fn read_manifest(path: &Path) -> Result<Vec<Job>> {
             output: output.unwrap_or_default(),
             extra,
         });
+    }
+    // Blank lines after the last row are the end of the file, not rows.
+    while jobs
+        .last()
+        .is_some_and(|j| j.input.is_empty() && j.output.is_empty())
+    {
+        jobs.pop();
     }
     Ok(jobs)
 }
@@ -698,7 +732,12 @@ fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
         Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
     };
-    let mut lines = text.lines();
+    // Rows are appended whole, newline last: a last line without one was cut by a kill.
+    let complete = match text.rfind('\n') {
+        Some(end) => &text[..=end],
+        None => "",
+    };
+    let mut lines = complete.lines();
     let Some(head) = lines.next() else {
         return Ok(Vec::new());
     };
@@ -716,7 +755,7 @@ fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
             path.display()
         );
     }
-    // A line cut short by a kill is dropped: its row runs again.
+    // A line cut short by a kill (too few fields, or no newline) is dropped: its row runs again.
     Ok(lines
         .filter_map(|l| StatusRow::parse(&split_csv(l), &columns))
         .collect())

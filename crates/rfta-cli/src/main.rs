@@ -9,6 +9,7 @@
 
 mod batch;
 mod info;
+mod paths;
 mod plane;
 mod psr;
 mod reconstruct;
@@ -77,8 +78,22 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let mut cli = Cli::parse();
     let ui = ui::Ui::new(cli.quiet, cli.verbose);
+    // No input is read past a quarter of the memory this process may use (a link to /dev/zero,
+    // a huge file): the rest is for decoding it and for the work.
+    if let Some(bytes) = ui::available_memory() {
+        rfta_io::set_read_limit(bytes / 4);
+    }
+    // Threads beyond the cores only cost (starting 10,000 took 42 s; results never depend on
+    // the count): capped, with a warning.
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    if let Some(n) = cli.threads.filter(|&n| n > cores) {
+        ui.say(format!(
+            "warning: --threads {n} is more than the {cores} cores here; using {cores}"
+        ));
+        cli.threads = Some(cores);
+    }
     if let Some(n) = cli.threads
         && let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
@@ -140,6 +155,10 @@ fn mc(
     iso: f64,
     ui: &ui::Ui,
 ) -> anyhow::Result<()> {
+    paths::Files::new()
+        .read_sdf("the input", input)
+        .write("the output (-o)", output)
+        .check()?;
     if rfta_io::is_sdf_2d(input)? {
         ui::check_output_2d(output)?;
         return plane::marching_squares(input, output, bounds, iso, ui);

@@ -58,6 +58,10 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn run(args: Args, ui: &crate::ui::Ui) -> anyhow::Result<()> {
+    crate::paths::Files::new()
+        .read("the input", &args.input)
+        .write("the output (-o)", &args.output)
+        .check()?;
     crate::ui::check_output(&args.output)?;
     let mut params = match args.preset {
         Preset::Poissonrecon => SpsrParams::default(),

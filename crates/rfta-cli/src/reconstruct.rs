@@ -59,7 +59,7 @@ pub(crate) struct Args {
 pub(crate) struct Checks {
     /// The SDF was clamped at this magnitude (samples at or beyond it get no tangency point).
     /// Without it a clamp is detected from flat plateaus of the values (see --no-check).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ui::parse_positive)]
     clamp: Option<f64>,
     /// Do not inspect the values: reconstruct even from samples that are not a signed distance
     /// (occupancy, random, rescaled values; a value beyond the samples' extent), and detect no
@@ -111,7 +111,7 @@ pub(crate) struct Tuning {
     /// Closed islands smaller than this many sample spacings across stay only where a sample
     /// witnesses them, inside them or touching them where the rest of the mesh leaves a gap (0
     /// keeps all; default: the library's `Params::min_island`).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::ui::parse_non_negative)]
     min_island: Option<f64>,
     /// The shape's genus, when known: the output becomes one surface of at most this genus (other
     /// components joined to the largest by a tube, the thinnest handles beyond it cut).
@@ -120,7 +120,7 @@ pub(crate) struct Tuning {
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
     /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
     /// samples always do).
-    #[arg(long, value_name = "SPACINGS")]
+    #[arg(long, value_name = "SPACINGS", value_parser = crate::ui::parse_non_negative)]
     owner_band: Option<f64>,
     /// Cells per axis of the empty-space rasterization (default: the paper's 64 ceil(n^(1/3) / 16)).
     #[arg(long, value_name = "CELLS", value_parser = clap::value_parser!(u32).range(8..=1024))]
@@ -310,6 +310,17 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
 }
 
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
+    let mut files = crate::paths::Files::new();
+    files
+        .read_sdf("the input", &args.input)
+        .write("the output (-o)", &args.output);
+    if let Some(p) = &args.report {
+        files.write("--report", p);
+    }
+    if let Some(p) = &args.points {
+        files.write("--points", p);
+    }
+    files.check()?;
     if rfta_io::is_sdf_2d(&args.input)? {
         crate::ui::check_output_2d(&args.output)?;
         let mut params = args.tuning.params();
@@ -482,6 +493,9 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
     } else {
         args.output.clone()
     };
+    crate::paths::Files::new()
+        .write("the output (-o)", &output)
+        .check()?;
     if args.two_d {
         crate::ui::check_output_2d(&output)?;
     } else {

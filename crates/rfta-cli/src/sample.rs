@@ -57,6 +57,18 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     if args.res == 0 {
         bail!("--res must be at least 1 (the grid has res + 1 samples per axis)");
     }
+    let mut files = crate::paths::Files::new();
+    if let Some(mesh) = &args.mesh {
+        files.read("the mesh", mesh);
+    }
+    files.write("the output (-o)", &args.output);
+    if rfta_io::extension_of(&args.output).as_deref() == Some("npy") {
+        files.write("the output's sidecar", &rfta_io::sidecar_path(&args.output));
+    }
+    if let Some(path) = &args.save_mesh {
+        files.write("--save-mesh", path);
+    }
+    files.check()?;
     let (mesh, name) = match (&args.mesh, args.shape) {
         (Some(path), _) => (rfta_io::read_mesh(path)?, path.display().to_string()),
         (None, Some(shape)) => (shape.mesh(), format!("built-in {shape:?}").to_lowercase()),
@@ -66,7 +78,17 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         rfta_io::write_mesh(path, &mesh)?;
         ui.say(format!("wrote {}", path.display()));
     }
+    let mut mesh = mesh;
     let topo = Topology::of(&mesh);
+    // An inside-out closed mesh has winding number -1 inside: every sample would come out
+    // positive, a grid of "outside" that describes no surface (hostile test D5).
+    if topo.is_watertight() && mesh.signed_volume() < 0.0 {
+        ui.say(format!(
+            "warning: {name} is inside out (its faces enclose a volume of {:.6}): sampled with its faces flipped, so that inside is negative",
+            mesh.signed_volume()
+        ));
+        mesh.flip();
+    }
     if !topo.is_watertight() {
         ui.say(format!(
             "warning: {name} is not watertight ({} boundary, {} non-manifold edges): the sign comes from the winding number, which is only approximate near holes",
@@ -107,6 +129,11 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         "sampled {n} points in {:.3} s",
         t1.elapsed().as_secs_f64()
     ));
+    if n_inside == 0 {
+        ui.say(format!(
+            "warning: no sample is inside {name}: the grid describes no surface (is the shape inside --bounds, and larger than a spacing?)"
+        ));
+    }
     rfta_io::write_sdf_grid(&args.output, &grid, &values)?;
     ui.say(format!(
         "wrote {} ({}^3 samples over [{}, {}], {} inside, {} outside)",

@@ -169,7 +169,8 @@ pub(crate) fn parse_size(s: &str) -> Result<u64, String> {
 }
 
 /// Memory this process can still use: `MemAvailable` of /proc/meminfo, lowered to the cgroup's
-/// remaining allowance where one is set. `None` where neither can be read.
+/// remaining allowance and to the address space `ulimit -v` leaves (an allocation past it
+/// aborts the process) where they are set. `None` where none can be read.
 pub(crate) fn available_memory() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
     let avail = meminfo.as_deref().and_then(|m| {
@@ -191,13 +192,33 @@ pub(crate) fn available_memory() -> Option<u64> {
         (Some(max), Some(cur)) => Some(max.saturating_sub(cur)),
         _ => None,
     };
-    match (avail, cgroup) {
-        (Some(a), Some(c)) => Some(a.min(c)),
-        (a, c) => a.or(c),
-    }
+    // RLIMIT_AS, soft ("Max address space  LIMIT  HARD  bytes"), less what is mapped now.
+    let address_space = std::fs::read_to_string("/proc/self/limits")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("Max address space"))
+                .and_then(|l| l.split_whitespace().nth(3))
+                .and_then(|v| v.parse::<u64>().ok())
+        })
+        .map(|limit| {
+            let mapped = std::fs::read_to_string("/proc/self/status")
+                .ok()
+                .and_then(|t| {
+                    t.lines()
+                        .find(|l| l.starts_with("VmSize:"))
+                        .and_then(|l| l.split_whitespace().nth(1))
+                        .and_then(|kb| kb.parse::<u64>().ok())
+                })
+                .unwrap_or(0)
+                * 1024;
+            limit.saturating_sub(mapped)
+        });
+    [avail, cgroup, address_space].into_iter().flatten().min()
 }
 
-/// Refuses an output path that could not be written, before the work rather than after it.
+/// Refuses a mesh output format that cannot be written, before the work rather than after it
+/// (where the file may go: [`crate::paths::Files`]).
 pub(crate) fn check_output(path: &std::path::Path) -> anyhow::Result<()> {
     if rfta_io::MeshFormat::from_path(path)? == rfta_io::MeshFormat::Off {
         anyhow::bail!(
@@ -205,7 +226,7 @@ pub(crate) fn check_output(path: &std::path::Path) -> anyhow::Result<()> {
             path.display()
         );
     }
-    check_dir(path)
+    Ok(())
 }
 
 /// As [`check_output`], for polylines (.obj, .svg, .csv).
@@ -219,20 +240,22 @@ pub(crate) fn check_output_2d(path: &std::path::Path) -> anyhow::Result<()> {
             path.display()
         );
     }
-    check_dir(path)
+    Ok(())
 }
 
-fn check_dir(path: &std::path::Path) -> anyhow::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => std::path::Path::new("."),
-    };
-    if !dir.is_dir() {
-        anyhow::bail!(
-            "{}: the directory {} does not exist",
-            path.display(),
-            dir.display()
-        );
+/// A finite number above zero (an option's value; NaN, infinities, zero and negatives refused
+/// where they are parsed rather than taken to mean something).
+pub(crate) fn parse_positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a finite number above 0")),
     }
-    Ok(())
+}
+
+/// A finite number at or above zero, as [`parse_positive`].
+pub(crate) fn parse_non_negative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a finite number at or above 0")),
+    }
 }

@@ -176,7 +176,7 @@ fn an_unwritable_output_is_refused_before_the_work() {
     for (out, expected) in [
         (
             "/nonexistent-dir/mesh.obj",
-            "the directory /nonexistent-dir does not exist",
+            "the folder /nonexistent-dir does not exist",
         ),
         ("mesh.off", "OFF is read-only"),
         ("mesh.xyz", "unsupported file type"),
