@@ -168,9 +168,41 @@ pub(crate) fn extension(path: &Path) -> Option<String> {
         .map(str::to_ascii_lowercase)
 }
 
+/// The most bytes [`read_bytes`] reads from one file ([`set_read_limit`]; no limit by default).
+static READ_LIMIT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(u64::MAX);
+
+/// Bounds what every reader of this crate reads from one file: a larger file, or a device or
+/// pipe that goes on past it (a link to `/dev/zero`), is an error instead of memory exhausted.
+/// A program sets it once, from the memory it may use.
+pub fn set_read_limit(bytes: u64) {
+    READ_LIMIT.store(bytes, std::sync::atomic::Ordering::Relaxed);
+}
+
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|source| Error::Io {
+    use std::io::Read;
+    let limit = READ_LIMIT.load(std::sync::atomic::Ordering::Relaxed);
+    let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })
+    };
+    let too_large = |what: String| Error::Parse {
+        path: path.to_path_buf(),
+        line: None,
+        detail: format!(
+            "{what}, more than the {limit} bytes this process may read (its limit, set from the memory it can use)"
+        ),
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if meta.is_file() && meta.len() > limit {
+        return Err(too_large(format!("the file is {} bytes", meta.len())));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large("it goes on".into()));
+    }
+    Ok(bytes)
 }

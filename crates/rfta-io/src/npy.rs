@@ -74,6 +74,18 @@ pub(crate) fn parse_header(bytes: &[u8]) -> ParseResult<Header> {
         .ok_or_else(|| ParseError::new("truncated .npy header"))?;
     let header =
         std::str::from_utf8(header).map_err(|_| ParseError::new("the .npy header is not text"))?;
+    // A key given twice: numpy takes the last, a first-match reader the first; neither guess is
+    // safe for a shape.
+    for key in ["descr", "fortran_order", "shape"] {
+        if header.matches(&format!("'{key}'")).count()
+            + header.matches(&format!("\"{key}\"")).count()
+            > 1
+        {
+            return Err(ParseError::new(format!(
+                "the .npy header names '{key}' twice"
+            )));
+        }
+    }
     let descr = dict_value(header, "descr")
         .ok_or_else(|| ParseError::new("the .npy header has no 'descr'"))?;
     let descr = descr.trim().trim_matches(|c| c == '\'' || c == '"');

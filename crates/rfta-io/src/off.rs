@@ -73,5 +73,15 @@ pub(crate) fn parse(bytes: &[u8]) -> ParseResult<TriMesh> {
         }
         fan(&corners, line, &mut faces)?;
     }
+    // A header that counts fewer records than the file holds: reading only the counted ones
+    // would drop the rest without a word.
+    if let Some((line, _)) = lines.next() {
+        return Err(ParseError::at_line(
+            line,
+            format!(
+                "more data than the header's counts ({n_vertices} vertices, {n_faces} faces) announce"
+            ),
+        ));
+    }
     Ok(TriMesh { vertices, faces })
 }

@@ -258,7 +258,20 @@ fn read_ascii(body: &[u8], elements: &mut [Element], header_lines: usize) -> Par
                     push_value(&mut p.column, v);
                 }
             }
+            if toks.next().is_some() {
+                return Err(ParseError::at_line(
+                    line,
+                    format!("more values than element '{}' has properties", el.name),
+                ));
+            }
         }
+    }
+    // Records beyond the header's counts would be dropped without a word.
+    if let Some((i, _)) = lines.next() {
+        return Err(ParseError::at_line(
+            header_lines + i + 1,
+            "more records than the header's element counts announce",
+        ));
     }
     Ok(())
 }
@@ -316,6 +329,22 @@ fn read_binary(body: &[u8], elements: &mut [Element], enc: Encoding) -> ParseRes
                 }
             }
         }
+    }
+    // Bytes beyond the counted records (a final line break aside): counts lower than the data,
+    // or an ASCII body under a binary header, read as garbage.
+    let rest = &body[pos..];
+    if !matches!(rest, b"" | b"\n" | b"\r\n") {
+        let ascii = body
+            .iter()
+            .all(|b| b.is_ascii_graphic() || b.is_ascii_whitespace());
+        return Err(ParseError::new(if ascii {
+            "the header says binary but the body is ASCII text (format ascii 1.0?)".to_string()
+        } else {
+            format!(
+                "{} bytes after the records the header's element counts announce",
+                rest.len()
+            )
+        }));
     }
     Ok(())
 }

@@ -283,11 +283,8 @@ fn resolve_grid(
     }
     let side = sidecar_path(path);
     if side.exists() {
-        let text = std::fs::read_to_string(&side).map_err(|source| Error::Io {
-            path: side.clone(),
-            source,
-        })?;
-        let car: Sidecar = serde_json::from_str(&text).map_err(|e| Error::Parse {
+        let text = crate::read_bytes(&side)?;
+        let car: Sidecar = serde_json::from_slice(&text).map_err(|e| Error::Parse {
             path: side.clone(),
             line: Some(e.line()),
             detail: format!("invalid sidecar: {e}"),

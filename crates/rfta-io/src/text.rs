@@ -3,7 +3,10 @@
 use crate::error::{ParseError, ParseResult};
 
 /// The file as UTF-8 text (a clear error otherwise).
+/// The text of a file, without the UTF-8 byte order mark that spreadsheet programs put first
+/// (kept, it made the first token unreadable, and a headerless file lost its first row).
 pub(crate) fn as_text(bytes: &[u8]) -> ParseResult<&str> {
+    let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
     std::str::from_utf8(bytes).map_err(|e| {
         ParseError::new(format!(
             "not a text file: invalid UTF-8 at byte {}",

@@ -9,6 +9,9 @@ use rfta_spsr::SpsrParams;
 
 use crate::{Error, Result};
 
+/// The most worker threads [`Params::threads`] may ask for.
+pub const MAX_THREADS: usize = 4096;
+
 /// Parameters. Lengths (`transport_step`, `tolerance`) are in the normalized unit box, as in the
 /// reference. The paper's symbols are given for each.
 #[derive(Debug, Clone, PartialEq)]
@@ -274,6 +277,12 @@ impl Params {
         }
         if self.threads == Some(0) {
             return bad("threads must be at least 1".into());
+        }
+        if let Some(t) = self.threads.filter(|&t| t > MAX_THREADS) {
+            return bad(format!(
+                "threads must be at most {MAX_THREADS}, got {t} (a pool that size takes minutes to \
+                 start, and results do not depend on the count)"
+            ));
         }
         if !(self.min_island >= 0.0 && self.min_island.is_finite()) {
             return bad(format!(
