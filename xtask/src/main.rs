@@ -190,7 +190,9 @@ fn ci(root: &Path) -> Result<()> {
             bail!("step '{name}' failed ({status})");
         }
     }
-    println!("==> python: the rfta package built into a fresh venv, gpytoolbox's tests, then pytest");
+    println!(
+        "==> python: the rfta package built into a fresh venv, gpytoolbox's tests, then pytest"
+    );
     python(root, &cargo)?;
     println!("==> shaders");
     shaders::run(root)?;
