@@ -69,7 +69,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         files.write("--save-mesh", path);
     }
     files.check()?;
-    let (mesh, name) = match (&args.mesh, args.shape) {
+    let (mut mesh, name) = match (&args.mesh, args.shape) {
         (Some(path), _) => (rfta_io::read_mesh(path)?, path.display().to_string()),
         (None, Some(shape)) => (shape.mesh(), format!("built-in {shape:?}").to_lowercase()),
         (None, None) => bail!("give a mesh file or --shape"),
@@ -78,7 +78,6 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         rfta_io::write_mesh(path, &mesh)?;
         ui.say(format!("wrote {}", path.display()));
     }
-    let mut mesh = mesh;
     let topo = Topology::of(&mesh);
     // An inside-out closed mesh has winding number -1 inside: every sample would come out
     // positive, a grid of "outside" that describes no surface (hostile test D5).

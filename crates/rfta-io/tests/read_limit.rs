@@ -20,12 +20,17 @@ fn reads_stop_at_the_limit_with_a_clear_error() {
     set_read_limit(64 * 1024);
     assert_eq!(read_mesh(&small).expect("within the limit").n_faces(), 1);
     let e = read_mesh(&large).expect_err("over the limit").to_string();
-    assert!(e.contains("big.obj") && e.contains("more than the 65536 bytes"), "{e}");
+    assert!(
+        e.contains("big.obj") && e.contains("more than the 65536 bytes"),
+        "{e}"
+    );
     #[cfg(unix)]
     {
         let zero = dir.join("zero.obj");
         std::os::unix::fs::symlink("/dev/zero", &zero).expect("link");
-        let e = read_mesh(&zero).expect_err("a device that goes on").to_string();
+        let e = read_mesh(&zero)
+            .expect_err("a device that goes on")
+            .to_string();
         assert!(e.contains("it goes on"), "{e}");
     }
     let _ = std::fs::remove_dir_all(dir);
