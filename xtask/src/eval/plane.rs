@@ -92,18 +92,15 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
                         .map_err(Into::into),
                 };
                 let cpu_seconds = crate::bench::process_usage().0 - cpu;
+                // A curve with a defect is no result, whatever its accuracy.
+                let result =
+                    result.map_err(|e| format!("error: {e}")).and_then(|curve| {
+                        match curve.unreferenced_vertices() {
+                            0 => Ok(curve),
+                            k => Err(super::defect(k)),
+                        }
+                    });
                 let row = match result {
-                    Ok(curve) if curve.unreferenced_vertices() > 0 => Row2 {
-                        shape: name.clone(),
-                        n,
-                        method,
-                        cpu_seconds,
-                        chamfer: f64::NAN,
-                        hausdorff: f64::NAN,
-                        loops: 0,
-                        gt_loops: gt.loops(),
-                        status: super::defect(curve.unreferenced_vertices()),
-                    },
                     Ok(curve) => Row2 {
                         shape: name.clone(),
                         n,
@@ -115,7 +112,7 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
                         gt_loops: gt.loops(),
                         status: "ok".into(),
                     },
-                    Err(e) => Row2 {
+                    Err(status) => Row2 {
                         shape: name.clone(),
                         n,
                         method,
@@ -124,7 +121,7 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
                         hausdorff: f64::NAN,
                         loops: 0,
                         gt_loops: gt.loops(),
-                        status: format!("error: {e}"),
+                        status,
                     },
                 };
                 println!(

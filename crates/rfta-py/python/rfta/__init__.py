@@ -44,14 +44,7 @@ __all__ = [
 ]
 
 # The public objects say they are rfta's (help(), repr, pickling of a Reconstruction).
-for _obj in (
-    Reconstruction,
-    marching_cubes,
-    reach_for_the_arcs,
-    reconstruct,
-    sample_sdf,
-    screened_poisson,
-    signed_distance,
-):
-    _obj.__module__ = __name__
-del _obj
+for _name in __all__:
+    if _name != "__version__":
+        globals()[_name].__module__ = __name__
+del _name
