@@ -9,7 +9,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -186,12 +186,9 @@ impl StatusRow {
         .collect()
     }
 
-    fn parse(fields: &[String], columns: &HashMap<String, usize>) -> Option<Self> {
-        // A line cut short (a killed shard) is no record: its row runs again.
-        if fields.len() != columns.len() {
-            return None;
-        }
-        let get = |name: &str| columns.get(name).and_then(|&i| fields.get(i)).cloned();
+    /// The record on `row` of a status `table`, as written (fields untrimmed, empty ones kept).
+    fn parse(table: &rfta_io::table::Table, row: &rfta_io::table::Row) -> Option<Self> {
+        let get = |name: &str| table.column(name).and_then(|i| row.fields.get(i)).cloned();
         Some(Self {
             row: get("row")?.parse().ok()?,
             input: get("input")?,
@@ -575,77 +572,44 @@ fn figures(report: &Path) -> Vec<String> {
 /// The manifest's rows. A row that cannot run (a missing path, a bad bound, clamp or preset)
 /// is kept with the reason, so that it ends as `failed` with the rest going on.
 fn read_manifest(path: &Path) -> Result<Vec<Job>> {
-    let file = File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
-    let mut lines = BufReader::new(file).lines();
-    let head = match lines.next() {
-        Some(l) => l.with_context(|| format!("{}: cannot read", path.display()))?,
-        None => bail!(
-            "{}: empty manifest (expected a header input,output)",
-            path.display()
-        ),
-    };
-    // A spreadsheet's UTF-8 byte order mark is not part of the first column's name.
-    let head = head.strip_prefix('\u{feff}').unwrap_or(&head);
-    let mut columns: HashMap<String, usize> = HashMap::new();
-    for (i, c) in split_csv(head).into_iter().enumerate() {
-        let name = c.trim().to_ascii_lowercase();
-        if columns.insert(name.clone(), i).is_some() {
-            bail!(
-                "{}: the header names the column '{name}' twice",
-                path.display()
-            );
-        }
-    }
+    let table = rfta_io::table::read_table(path)?;
     for needed in ["input", "output"] {
-        if !columns.contains_key(needed) {
+        if table.column(needed).is_none() {
             bail!(
                 "{}: the header has no '{needed}' column (found: {})",
                 path.display(),
-                head.trim()
+                table.columns.join(",")
             );
         }
     }
-    let mut jobs = Vec::new();
-    for (row, line) in lines.enumerate() {
-        let line = line.with_context(|| format!("{}: cannot read", path.display()))?;
-        if line.trim().is_empty() {
+    Ok(table
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(row, r)| {
             // Blank lines still count as rows, so shards stay stable when they are filled in.
-            jobs.push(Job {
+            if r.is_blank() {
+                return Job {
+                    row,
+                    input: String::new(),
+                    output: String::new(),
+                    extra: Err("empty row".into()),
+                };
+            }
+            let get = |name: &str| table.get(r, name).map(str::to_string);
+            let (input, output) = (get("input"), get("output"));
+            let extra = match (&input, &output) {
+                (Some(_), Some(_)) => row_args(get("bounds"), get("clamp"), get("preset")),
+                _ => Err("the row needs both an input and an output".into()),
+            };
+            Job {
                 row,
-                input: String::new(),
-                output: String::new(),
-                extra: Err("empty row".into()),
-            });
-            continue;
-        }
-        let fields = split_csv(&line);
-        let get = |name: &str| {
-            columns
-                .get(name)
-                .and_then(|&i| fields.get(i))
-                .map(|f| f.trim().to_string())
-                .filter(|f| !f.is_empty())
-        };
-        let (input, output) = (get("input"), get("output"));
-        let extra = match (&input, &output) {
-            (Some(_), Some(_)) => row_args(get("bounds"), get("clamp"), get("preset")),
-            _ => Err("the row needs both an input and an output".into()),
-        };
-        jobs.push(Job {
-            row,
-            input: input.unwrap_or_default(),
-            output: output.unwrap_or_default(),
-            extra,
-        });
-    }
-    // Blank lines after the last row are the end of the file, not rows.
-    while jobs
-        .last()
-        .is_some_and(|j| j.input.is_empty() && j.output.is_empty())
-    {
-        jobs.pop();
-    }
-    Ok(jobs)
+                input: input.unwrap_or_default(),
+                output: output.unwrap_or_default(),
+                extra,
+            }
+        })
+        .collect())
 }
 
 /// `reconstruct` arguments from a row's optional columns.
@@ -683,81 +647,29 @@ fn row_args(
     })
 }
 
-/// Splits one CSV line (RFC 4180 quoting: fields in double quotes may hold commas, `""` is a
-/// quote).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut fields = Vec::new();
-    let mut field = String::new();
-    let mut quoted = false;
-    let mut chars = line.trim_end_matches(['\r', '\n']).chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                field.push('"');
-                chars.next();
-            }
-            ('"', true) => quoted = false,
-            ('"', false) if field.trim().is_empty() => {
-                field.clear();
-                quoted = true;
-            }
-            (',', false) => fields.push(std::mem::take(&mut field)),
-            _ => field.push(c),
-        }
-    }
-    fields.push(field);
-    fields
-}
-
-/// One CSV line, quoting the fields that need it.
-fn join_csv(fields: &[String]) -> String {
-    fields
-        .iter()
-        .map(|f| {
-            let f = f.replace(['\n', '\r'], " ");
-            if f.contains([',', '"']) {
-                format!("\"{}\"", f.replace('"', "\"\""))
-            } else {
-                f
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(",")
-}
-
 /// The rows of a status file (none if it does not exist).
 fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
-    };
-    // Rows are appended whole, newline last: a last line without one was cut by a kill.
-    let complete = match text.rfind('\n') {
-        Some(end) => &text[..=end],
-        None => "",
-    };
-    let mut lines = complete.lines();
-    let Some(head) = lines.next() else {
+    if !path.exists() {
         return Ok(Vec::new());
-    };
-    let columns: HashMap<String, usize> = split_csv(head)
-        .into_iter()
-        .enumerate()
-        .map(|(i, c)| (c, i))
-        .collect();
+    }
+    let table = rfta_io::table::read_table(path)?;
     if !["row", "input", "output", "status"]
         .iter()
-        .all(|c| columns.contains_key(*c))
+        .all(|c| table.column(c).is_some())
     {
         bail!(
-            "{}: not an rfta batch status file (header: {head})",
-            path.display()
+            "{}: not an rfta batch status file (header: {})",
+            path.display(),
+            table.columns.join(",")
         );
     }
-    // A line cut short by a kill (too few fields, or no newline) is dropped: its row runs again.
-    Ok(lines
-        .filter_map(|l| StatusRow::parse(&split_csv(l), &columns))
+    // Rows are appended whole, line break last: a line cut short by a kill (no line break, or
+    // too few fields) is no record, and its row runs again.
+    Ok(table
+        .rows
+        .iter()
+        .filter(|r| r.complete && r.fields.len() == table.columns.len())
+        .filter_map(|r| StatusRow::parse(&table, r))
         .collect())
 }
 
@@ -798,9 +710,9 @@ impl StatusFile {
     /// Starts `path` afresh (atomically) with `rows`, then opens it for appending.
     fn create(path: &Path, rows: &[StatusRow]) -> Result<Self> {
         rfta_io::write_atomic(path, |w| {
-            writeln!(w, "{}", join_csv(&header()))?;
+            writeln!(w, "{}", rfta_io::table::join_csv(&header()))?;
             for r in rows {
-                writeln!(w, "{}", join_csv(&r.fields()))?;
+                writeln!(w, "{}", rfta_io::table::join_csv(&r.fields()))?;
             }
             Ok(())
         })?;
@@ -812,7 +724,7 @@ impl StatusFile {
     }
 
     fn append(&mut self, row: &StatusRow) -> Result<()> {
-        writeln!(self.file, "{}", join_csv(&row.fields()))?;
+        writeln!(self.file, "{}", rfta_io::table::join_csv(&row.fields()))?;
         self.file.sync_data()?;
         Ok(())
     }
@@ -837,10 +749,15 @@ fn merge(paths: &[PathBuf], out: Option<&Path>) -> Result<()> {
         },
         Path::to_path_buf,
     );
+    let mut files = crate::paths::Files::new();
+    for (k, p) in paths.iter().enumerate() {
+        files.read(format!("status file {}", k + 1), p);
+    }
+    files.write("the merged table (--status)", &out).check()?;
     rfta_io::write_atomic(&out, |w| {
-        writeln!(w, "{}", join_csv(&header()))?;
+        writeln!(w, "{}", rfta_io::table::join_csv(&header()))?;
         for r in &rows {
-            writeln!(w, "{}", join_csv(&r.fields()))?;
+            writeln!(w, "{}", rfta_io::table::join_csv(&r.fields()))?;
         }
         Ok(())
     })?;
@@ -880,16 +797,6 @@ fn merge(paths: &[PathBuf], out: Option<&Path>) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn csv_quotes_round_trip() {
-        let fields: Vec<String> = ["a", "b,c", "say \"hi\"", ""]
-            .into_iter()
-            .map(String::from)
-            .collect();
-        assert_eq!(split_csv(&join_csv(&fields)), fields);
-        assert_eq!(split_csv("x, \"1,2\" ,y"), ["x", "1,2 ", "y"]);
-    }
 
     #[test]
     fn shards_cover_every_row_once() {

@@ -6,6 +6,7 @@
 //! | SDF grids | NumPy `.npy` (float32/float64, C or Fortran order), OpenEXR volume | `.npy` (float64), OpenEXR |
 //! | scattered SDF samples | PLY (`x y z` + `sdf`/`value`/`scalar`), CSV/XYZ text (`x y z s`) | |
 //! | oriented points | PLY (`x y z nx ny nz`), text (`x y z nx ny nz`) | PLY |
+//! | tables (batch manifests, status files) | CSV with a header ([`table`]) | CSV lines |
 //!
 //! The format is chosen from the file extension. Every reader takes untrusted bytes: a truncated
 //! or malformed file gives an [`Error`] that names the file and what is wrong (and the line, for
@@ -44,6 +45,7 @@ mod plane;
 mod ply;
 mod sdf;
 mod stl;
+pub mod table;
 mod text;
 
 pub use atomic::{remove_temp_files, write_atomic};
