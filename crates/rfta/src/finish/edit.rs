@@ -1,0 +1,215 @@
+//! Edits of a mesh that keep it a surface: the faces around each vertex ([`Incidence`]), vertex
+//! moves taken without turning a face over ([`apply_moves`]), and new vertices on faces or edges
+//! ([`Splitter`]).
+
+use rfta_geom::TriMesh;
+use rfta_geom::glam::DVec3;
+
+/// How many times [`apply_moves`] goes over the vertices.
+pub(super) const MOVE_SWEEPS: usize = 8;
+
+/// Moves each vertex towards its `moved_to` position where it has one without folding the
+/// surface: in index order, each takes the largest of its whole remaining move, half, a quarter
+/// or an eighth of it that turns none of its faces over (a face's normal against the one it had),
+/// given where its neighbours are by then; [`MOVE_SWEEPS`] sweeps, so that a vertex held back by
+/// a neighbour (at sharp features the faces can be a fiftieth of a spacing across) follows it.
+/// `incident` holds the mesh's faces around each vertex. Returns the vertices that moved.
+pub(super) fn apply_moves(
+    mesh: &mut TriMesh,
+    incident: &Incidence,
+    moved_to: &[Option<DVec3>],
+) -> Vec<u32> {
+    let targets: Vec<(u32, DVec3)> = (0..mesh.vertices.len() as u32)
+        .filter_map(|v| moved_to[v as usize].map(|t| (v, t)))
+        .collect();
+    if targets.is_empty() {
+        return Vec::new();
+    }
+    let normals: Vec<DVec3> = (0..mesh.faces.len())
+        .map(|f| mesh.face_normal_scaled(f))
+        .collect();
+    let turned = |mesh: &TriMesh, v: u32| {
+        incident
+            .faces(v)
+            .iter()
+            .any(|&f| normals[f as usize].dot(mesh.face_normal_scaled(f as usize)) <= 0.0)
+    };
+    let original: Vec<DVec3> = targets
+        .iter()
+        .map(|&(v, _)| mesh.vertices[v as usize])
+        .collect();
+    let mut arrived = vec![false; targets.len()];
+    for _ in 0..MOVE_SWEEPS {
+        for (k, &(v, target)) in targets.iter().enumerate() {
+            if arrived[k] {
+                continue;
+            }
+            let from = mesh.vertices[v as usize];
+            for fraction in [1.0, 0.5, 0.25, 0.125] {
+                mesh.vertices[v as usize] = from + (target - from) * fraction;
+                if !turned(mesh, v) {
+                    arrived[k] = fraction == 1.0;
+                    break;
+                }
+                mesh.vertices[v as usize] = from;
+            }
+        }
+    }
+    targets
+        .iter()
+        .zip(&original)
+        .filter(|&(&(v, _), o)| mesh.vertices[v as usize] != *o)
+        .map(|(&(v, _), _)| v)
+        .collect()
+}
+
+/// The faces around each vertex of a mesh.
+pub(super) struct Incidence {
+    /// Where each vertex's faces start in `faces` (one more entry than vertices).
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl Incidence {
+    pub(super) fn of(mesh: &TriMesh) -> Self {
+        let mut start = vec![0u32; mesh.vertices.len() + 1];
+        for face in &mesh.faces {
+            for &v in face {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..mesh.vertices.len() {
+            start[v + 1] += start[v];
+        }
+        let mut at = start.clone();
+        let mut faces = vec![0u32; start[mesh.vertices.len()] as usize];
+        for (f, face) in mesh.faces.iter().enumerate() {
+            for &v in face {
+                faces[at[v as usize] as usize] = f as u32;
+                at[v as usize] += 1;
+            }
+        }
+        Self { start, faces }
+    }
+
+    pub(super) fn faces(&self, v: u32) -> &[u32] {
+        &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// Puts new vertices on a mesh's faces or edges, each face at most once (faces a split has made
+/// or changed are left alone until the next [`Splitter`]), given the faces around each vertex
+/// before the first split.
+pub(super) struct Splitter<'a> {
+    incident: &'a Incidence,
+    pub(super) touched: Vec<bool>,
+}
+
+impl<'a> Splitter<'a> {
+    pub(super) fn new(incident: &'a Incidence, mesh: &TriMesh) -> Self {
+        Self {
+            incident,
+            touched: vec![false; mesh.faces.len()],
+        }
+    }
+
+    /// Adds a vertex at `at` for the point of face `f` with barycentric coordinates `b`: the
+    /// face splits in three, or, within a fiftieth of its barycentric range of an edge, it and
+    /// the face beside that edge split in two each. Not made (`None`) near a vertex, where a face
+    /// was split already, or where a new face would turn against the face it is part of (`at`
+    /// off the face). Returns the new vertex.
+    pub(super) fn split(
+        &mut self,
+        mesh: &mut TriMesh,
+        f: usize,
+        b: [f64; 3],
+        at: DVec3,
+    ) -> Option<u32> {
+        if self.touched.get(f).is_none_or(|&t| t) {
+            return None;
+        }
+        let face = mesh.faces[f];
+        let k = mesh.vertices.len() as u32;
+        let on_edge: Vec<usize> = (0..3).filter(|&j| b[j] < 0.02).collect();
+        let pieces: Vec<(Option<usize>, [u32; 3])> = match on_edge.as_slice() {
+            [] => vec![
+                (Some(f), [face[0], face[1], k]),
+                (None, [face[1], face[2], k]),
+                (None, [face[2], face[0], k]),
+            ],
+            &[j] => {
+                // The edge opposite vertex j, u -> v in this face, v -> u in the one beside it.
+                let (w, u, v) = (face[j], face[(j + 1) % 3], face[(j + 2) % 3]);
+                let g = self
+                    .incident
+                    .faces(u)
+                    .iter()
+                    .map(|&g| g as usize)
+                    .find(|&g| g != f && mesh.faces[g].contains(&v))?;
+                if self.touched[g] {
+                    return None;
+                }
+                let x = mesh.faces[g].into_iter().find(|&x| x != u && x != v)?;
+                vec![
+                    (Some(f), [u, k, w]),
+                    (None, [k, v, w]),
+                    (Some(g), [v, k, x]),
+                    (None, [k, u, x]),
+                ]
+            }
+            _ => return None,
+        };
+        // Each piece against the face it is cut from: `f` (its slot and the new face after it)
+        // or the one beside the edge.
+        let mut from = f;
+        for &(slot, t) in &pieces {
+            from = slot.unwrap_or(from);
+            let [a, b, c] = t.map(|x| {
+                if x == k {
+                    at
+                } else {
+                    mesh.vertices[x as usize]
+                }
+            });
+            if (b - a).cross(c - a).dot(mesh.face_normal_scaled(from)) <= 0.0 {
+                return None;
+            }
+        }
+        mesh.vertices.push(at);
+        for (slot, piece) in pieces {
+            match slot {
+                Some(g) => {
+                    self.touched[g] = true;
+                    mesh.faces[g] = piece;
+                }
+                None => mesh.faces.push(piece),
+            }
+        }
+        Some(k)
+    }
+
+    /// Moves vertex `v` to `to`, unless a face around it was split already or would turn over.
+    pub(super) fn move_vertex(&mut self, mesh: &mut TriMesh, v: u32, to: DVec3) -> bool {
+        let around = self.incident.faces(v);
+        if around.iter().any(|&f| self.touched[f as usize]) {
+            return false;
+        }
+        let normals: Vec<DVec3> = around
+            .iter()
+            .map(|&f| mesh.face_normal_scaled(f as usize))
+            .collect();
+        let from = std::mem::replace(&mut mesh.vertices[v as usize], to);
+        let turned = around
+            .iter()
+            .zip(&normals)
+            .any(|(&f, n)| mesh.face_normal_scaled(f as usize).dot(*n) <= 0.0);
+        if turned {
+            mesh.vertices[v as usize] = from;
+            return false;
+        }
+        for &f in around {
+            self.touched[f as usize] = true;
+        }
+        true
+    }
+}

@@ -1,0 +1,355 @@
+//! The repair steps of the final step, on meshes and samples with known answers.
+
+use rfta_geom::glam::DVec3;
+use rfta_geom::{Aabb, shapes};
+
+use super::clear::*;
+use super::dent::*;
+use super::islands::*;
+use super::*;
+
+/// Eight samples 0.2 apart, about a spacing beyond the unit sphere, with its exact distances:
+/// they set the spacing of the dent tests.
+fn far_samples() -> (Vec<DVec3>, Vec<f64>) {
+    let positions: Vec<DVec3> = (0..8)
+        .map(|k| {
+            let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
+            DVec3::new(bit(0), bit(1), 2.0 + bit(2))
+        })
+        .collect();
+    let values = positions.iter().map(|p| p.length() - 1.0).collect();
+    (positions, values)
+}
+
+/// The exact distance to the sphere of radius 0.5 on the 21^3 grid over [-1, 1]^3.
+fn ball_grid() -> SdfSamples {
+    let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
+    let values = (0..grid.len())
+        .map(|i| grid.position(i).length() - 0.5)
+        .collect();
+    SdfSamples::grid(grid, values).expect("samples")
+}
+
+fn winding(mesh: &TriMesh, p: DVec3) -> f64 {
+    rfta_mesh::MeshIndex::new(mesh)
+        .expect("mesh")
+        .winding_number(p)
+}
+
+#[test]
+fn a_dent_puts_a_sample_whose_small_sphere_a_face_cuts_on_its_side() {
+    let mut mesh = shapes::icosphere(1.0, 2);
+    let [a, b, c] = mesh.triangle(0);
+    let n = (b - a).cross(c - a).normalize();
+    let centroid = (a + b + c) / 3.0;
+    // Eight far samples (0.2 apart) set the spacing; the ninth lies 0.003 inside face 0 and
+    // says "outside, 0.01 from the surface": its sphere is cut by the face, no vertex in it.
+    let (mut positions, mut values) = far_samples();
+    let wrong = centroid - 0.003 * n;
+    positions.push(wrong);
+    values.push(0.01);
+    // A sample on its side, equally close, changes nothing.
+    let right = (a + 2.0 * b + 3.0 * c) / 6.0 + 0.003 * n;
+    positions.push(right);
+    values.push(0.01);
+    let samples = SdfSamples::scattered(positions, values).expect("samples");
+    assert!(winding(&mesh, wrong) > 0.5, "inside before");
+    let faces = mesh.faces.len();
+    assert_eq!(dent_wrong_side(&mut mesh, &samples), 1);
+    assert_eq!(mesh.faces.len(), faces + 2);
+    assert!(winding(&mesh, wrong) < 0.5, "outside after");
+    assert!(winding(&mesh, right) < 0.5);
+    let topology = rfta_mesh::Topology::of(&mesh);
+    assert!(topology.is_watertight() && topology.is_consistently_oriented());
+    // Its sphere is clear of the dent's apex.
+    let apex = mesh.vertices[mesh.vertices.len() - 1];
+    assert!(apex.distance(wrong) > 0.01);
+}
+
+/// The same where the mesh's point nearest the sample is on an edge (both faces beside it
+/// split, 2 faces more each) or a vertex (the vertex moves, no face is added); the sample
+/// ends on its side and the mesh stays closed.
+#[test]
+fn a_dent_at_an_edge_or_a_vertex_puts_the_sample_on_its_side() {
+    for at_vertex in [false, true] {
+        let mut mesh = shapes::icosphere(1.0, 2);
+        let [a, b, _] = mesh.triangle(0);
+        let on = if at_vertex { a } else { (a + b) / 2.0 };
+        // Inside the sphere, 0.003 under the surface point, says "outside, 0.01 away".
+        let wrong = on * (1.0 - 0.003 / on.length());
+        let (mut positions, mut values) = far_samples();
+        positions.push(wrong);
+        values.push(0.01);
+        let samples = SdfSamples::scattered(positions, values).expect("samples");
+        assert!(winding(&mesh, wrong) > 0.5, "inside before");
+        let (faces, vertices) = (mesh.faces.len(), mesh.vertices.len());
+        assert_eq!(
+            dent_wrong_side(&mut mesh, &samples),
+            1,
+            "vertex {at_vertex}"
+        );
+        let more = if at_vertex { (0, 0) } else { (2, 1) };
+        assert_eq!(
+            (mesh.faces.len(), mesh.vertices.len()),
+            (faces + more.0, vertices + more.1)
+        );
+        assert!(
+            winding(&mesh, wrong) < 0.5,
+            "outside after (vertex {at_vertex})"
+        );
+        let topology = rfta_mesh::Topology::of(&mesh);
+        assert!(topology.is_watertight() && topology.is_consistently_oriented());
+    }
+}
+
+fn union(parts: &[TriMesh]) -> TriMesh {
+    let mut out = TriMesh::default();
+    for m in parts {
+        out.append(m);
+    }
+    out
+}
+
+fn ball(c: DVec3, r: f64) -> TriMesh {
+    let mut m = shapes::icosphere(r, 2);
+    m.map_vertices(|v| v + c);
+    m
+}
+
+/// A surface sunk 0.05 into the ball of radius 0.5 (grid spacing 0.1) enters the inside
+/// samples' spheres; pushed out, no vertex is deeper than the push depth in any of them (brute
+/// force), and a surface on the true sphere does not move.
+#[test]
+fn pushed_vertices_leave_every_sphere_and_others_stay() {
+    let unit = UnitBox::new(&ball_grid(), None, None);
+    let all: Vec<u32> = (0..unit.len() as u32).collect();
+    let tree = SphereTree::with_indices(&unit.spheres, &all);
+    let depth = PUSH_DEPTH * unit.spacing();
+    let deepest = |mesh: &TriMesh| {
+        mesh.vertices
+            .iter()
+            .flat_map(|&v| {
+                let p = unit.to_unit(v);
+                unit.spheres
+                    .iter()
+                    .map(move |s| s.radius - (p - s.center).length())
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let mut sunk = shapes::icosphere(0.45, 3);
+    assert!(deepest(&sunk) > 0.02, "the test surface must enter spheres");
+    let before = sunk.clone();
+    push_out_of_spheres(&mut sunk, &unit, &tree, depth);
+    let moved = before
+        .vertices
+        .iter()
+        .zip(&sunk.vertices)
+        .filter(|(a, b)| a != b);
+    assert_eq!(moved.count(), sunk.vertices.len());
+    assert!(deepest(&sunk) <= depth + 1e-12, "{}", deepest(&sunk));
+    // Out of the spheres is back near the true surface (within the grid's resolution).
+    for v in &sunk.vertices {
+        assert!((v.length() - 0.5).abs() < 0.03, "{}", v.length());
+    }
+    let mut exact = shapes::icosphere(0.5, 3);
+    let before = exact.clone();
+    push_out_of_spheres(&mut exact, &unit, &tree, depth);
+    assert_eq!(exact, before);
+}
+
+/// The deepest entry of any face of `mesh` (samples' coordinates) into the spheres of `unit`,
+/// in sample spacings, by brute force.
+fn deepest_entry(unit: &UnitBox, mesh: &TriMesh) -> f64 {
+    let part = in_unit_box(mesh, unit);
+    unit.spheres
+        .iter()
+        .map(|s| {
+            let d = (0..part.faces.len())
+                .map(|f| {
+                    let [a, b, c] = part.triangle(f);
+                    let (q, _) = rfta_geom::kernels::closest_point_on_triangle(s.center, a, b, c);
+                    (q - s.center).length()
+                })
+                .fold(f64::INFINITY, f64::min);
+            (s.radius - d) / unit.spacing()
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// A coarse surface around the ball of radius 0.5 (grid spacing 0.1), a quarter spacing too
+/// large, enters the outside samples' spheres, the far ones too, and its faces (1.6 spacings
+/// across) cut small spheres with no vertex inside. Cleared, no face enters any sphere by more
+/// than the margin at which the consistency check counts an entry (brute force over every
+/// sphere and face), vertices were added where faces cut, and the mesh is still closed and
+/// oriented with the same Euler characteristic.
+#[test]
+fn cleared_spheres_are_left_by_faces_too() {
+    let unit = UnitBox::new(&ball_grid(), None, None);
+    let mut mesh = shapes::icosphere(0.525, 2);
+    assert!(
+        deepest_entry(&unit, &mesh) > 0.2,
+        "{}",
+        deepest_entry(&unit, &mesh)
+    );
+    let depth = PUSH_DEPTH * unit.spacing();
+    let added = clear_spheres(&mut mesh, &unit, f64::INFINITY, depth);
+    assert!(added > 0);
+    let entry = deepest_entry(&unit, &mesh);
+    assert!(entry < consistency::ENTER_MARGIN, "{entry}");
+    let topology = rfta_mesh::Topology::of(&mesh);
+    assert!(topology.is_watertight() && topology.is_manifold());
+    assert!(topology.is_consistently_oriented());
+    let euler =
+        mesh.vertices.len() as i64 - (3 * mesh.faces.len() / 2) as i64 + mesh.faces.len() as i64;
+    assert_eq!(euler, 2);
+    // Out of the spheres is on the true surface (within the grid's resolution).
+    for v in &mesh.vertices {
+        assert!((v.length() - 0.5).abs() < 0.04, "{}", v.length());
+    }
+}
+
+#[test]
+fn components_go_by_the_verdict_and_the_largest_always_stays() {
+    let main = ball(DVec3::ZERO, 1.0);
+    let small = ball(DVec3::new(3.0, 0.0, 0.0), 0.01);
+    let doomed = ball(DVec3::new(0.0, 3.0, 0.0), 0.3);
+    let free = ball(DVec3::new(0.0, 0.0, 3.0), 0.3);
+    let mesh = union(&[main.clone(), small, doomed, free.clone()]);
+    let verdict = |_: &[usize], b: Aabb, _: &[usize]| {
+        if (b.max - b.min).length() < 0.1 {
+            Some(Island::Small)
+        } else if b.contains(DVec3::new(0.0, 3.0, 0.0)) {
+            Some(Island::Unsupported)
+        } else {
+            None
+        }
+    };
+    let (kept, removed) = remove_islands(&mesh, |_| false, verdict);
+    assert_eq!(removed, [1, 1]);
+    let expect = union(&[main, free]);
+    assert_eq!(kept.faces.len(), expect.faces.len());
+    assert_eq!(kept.vertices.len(), expect.vertices.len());
+    // What is left is the first and the last ball: near the origin or near (0, 0, 3).
+    assert!(
+        kept.vertices
+            .iter()
+            .all(|v| v.length() < 1.01 || (*v - DVec3::new(0.0, 0.0, 3.0)).length() < 0.31)
+    );
+    // The largest component is never judged; an empty mesh is returned as it is.
+    let tiny = ball(DVec3::ZERO, 0.01);
+    let (all, removed) = remove_islands(&tiny, |_| false, |_, _, _| Some(Island::Small));
+    assert!(all == tiny && removed == [0, 0]);
+    let (empty, removed) = remove_islands(
+        &TriMesh::default(),
+        |_| false,
+        |_, _, _| Some(Island::Small),
+    );
+    assert!(empty.faces.is_empty() && removed == [0, 0]);
+}
+
+/// An inward-facing component goes, even the largest, unless another encloses it (a cavity);
+/// nothing goes when every component would.
+#[test]
+fn an_inverted_shell_goes_and_a_cavity_stays() {
+    let inner = ball(DVec3::ZERO, 0.5);
+    let mut shell = ball(DVec3::ZERO, 3.0);
+    shell.flip();
+    let mesh = union(&[inner.clone(), shell.clone()]);
+    let (kept, removed) = remove_islands(
+        &mesh,
+        |faces| inverted_and_unenclosed(&mesh, faces, &OnceLock::new()),
+        |_, _, _| None,
+    );
+    assert_eq!(removed, [0, 1]);
+    assert_eq!(kept.faces.len(), inner.faces.len());
+    assert!(kept.vertices.iter().all(|v| v.length() < 0.51));
+    // Inside a solid ball of radius 4, the inverted shell is a cavity and stays.
+    let outer = ball(DVec3::ZERO, 4.0);
+    let hollow = union(&[outer, shell, inner]);
+    let (kept, removed) = remove_islands(
+        &hollow,
+        |faces| inverted_and_unenclosed(&hollow, faces, &OnceLock::new()),
+        |_, _, _| None,
+    );
+    assert_eq!(removed, [0, 0]);
+    assert_eq!(kept.faces.len(), hollow.faces.len());
+}
+
+/// The verdict on a small closed component, against grids whose samples describe it or not:
+/// kept when a sample inside says so, removed when the samples say empty space (or solid).
+#[test]
+fn a_small_component_stays_only_where_the_samples_enclose_it() {
+    use rfta_geom::{Grid, SdfSamples};
+    let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+    let samples = |f: &dyn Fn(DVec3) -> f64| {
+        let values = (0..grid.len()).map(|i| f(grid.position(i))).collect();
+        SdfSamples::grid(grid, values).expect("samples")
+    };
+    let ball_sdf = |p: DVec3| p.length() - 0.5;
+    let (solid_c, cavity_c) = (DVec3::new(0.8, 0.0, 0.0), DVec3::new(0.2, 0.0, 0.0));
+    let with_solid = samples(&|p| ball_sdf(p).min((p - solid_c).length() - 0.05));
+    let with_cavity = samples(&|p| ball_sdf(p).max(0.05 - (p - cavity_c).length()));
+    let plain = samples(&ball_sdf);
+    // A small outward ball (a solid), and a small inward one (a cavity), 1.7 spacings across.
+    let solid = ball(solid_c, 0.05);
+    let mut cavity = ball(cavity_c, 0.05);
+    cavity.flip();
+    let params = Params::default();
+    // The largest component: the ball of radius 0.5, in the unit box.
+    let judge_on = |s: &SdfSamples, m: &TriMesh| {
+        let unit = UnitBox::new(s, None, None);
+        let mut main = ball(DVec3::ZERO, 0.5);
+        main.map_vertices(|v| unit.to_unit(v));
+        let main = rfta_mesh::MeshIndex::new(&main).expect("index");
+        let faces: Vec<usize> = (0..m.faces.len()).collect();
+        let bounds = Aabb::from_points(&m.vertices);
+        judge(
+            &unit,
+            &params,
+            &OnceLock::new(),
+            Some(&main),
+            m,
+            &faces,
+            bounds,
+        )
+    };
+    assert_eq!(judge_on(&with_solid, &solid), None);
+    // Without the small parts, the samples around them are large: inside their spheres.
+    assert_eq!(judge_on(&plain, &solid), Some(Island::Unsupported));
+    assert_eq!(judge_on(&with_cavity, &cavity), None);
+    assert_eq!(judge_on(&plain, &cavity), Some(Island::Unsupported));
+    // A cavity (or solid) a fifth the size of the sample's sphere, around the sample: inside
+    // that sphere, but the sample says it is there, so it stays (the clearing widens it); the
+    // same cavity beside the sample, around none, goes.
+    let mut small_cavity = ball(cavity_c, 0.01);
+    small_cavity.flip();
+    assert_eq!(judge_on(&with_cavity, &small_cavity), None);
+    assert_eq!(judge_on(&with_solid, &ball(solid_c, 0.01)), None);
+    let mut beside = ball(cavity_c + DVec3::new(0.03, 0.0, 0.0), 0.01);
+    beside.flip();
+    assert_eq!(judge_on(&with_cavity, &beside), Some(Island::Unsupported));
+    // Size alone removes nothing: a ball a fifth of a spacing across, exactly where a
+    // negative sample says there is one, stays; a ball as small that straddles the big ball's
+    // surface around no sample goes.
+    let tiny = samples(&|p| ball_sdf(p).min((p - solid_c).length() - 0.01));
+    assert_eq!(judge_on(&tiny, &ball(solid_c, 0.01)), None);
+    assert_eq!(
+        judge_on(&tiny, &ball(DVec3::new(0.5, 0.05, 0.05), 0.01)),
+        Some(Island::Small)
+    );
+    // A thin part between the samples, no sample inside it (the nearest is 0.087 from its
+    // centre): the samples around it touch it and are far from the big ball, so it stays.
+    // A ball as large where the samples see nothing but the big ball is inside their spheres.
+    let thin_c = DVec3::new(0.75, 0.05, 0.05);
+    let thin = samples(&|p| ball_sdf(p).min((p - thin_c).length() - 0.03));
+    assert_eq!(judge_on(&thin, &ball(thin_c, 0.03)), None);
+    assert_eq!(
+        judge_on(&plain, &ball(thin_c, 0.03)),
+        Some(Island::Unsupported)
+    );
+    // Half a spacing off the thin part, the samples' spheres reach it no more.
+    assert_eq!(
+        judge_on(&thin, &ball(thin_c + DVec3::new(0.0, -0.3, 0.0), 0.03)),
+        Some(Island::Unsupported)
+    );
+}
