@@ -83,14 +83,32 @@ impl UnitBox {
         self.spheres.len()
     }
 
+    /// The map from the samples' coordinates into the unit box.
+    pub(crate) fn frame(&self) -> rfta_repair::Frame {
+        rfta_repair::Frame {
+            origin: self.trans,
+            scale: self.scale,
+        }
+    }
+
+    /// The spheres as repair takes them: in the unit box, with the way there.
+    pub(crate) fn sphere_set(&self) -> rfta_repair::Spheres<'_> {
+        rfta_repair::Spheres {
+            spheres: &self.spheres,
+            values: &self.values,
+            frame: self.frame(),
+            spacing: self.spacing(),
+        }
+    }
+
     /// A point of the samples' coordinates in the unit box.
     pub(crate) fn to_unit(&self, p: DVec3) -> DVec3 {
-        (p - self.trans) / self.scale
+        self.frame().to_frame(p)
     }
 
     /// A unit-box point back in the samples' coordinates.
     pub(crate) fn to_input(&self, p: DVec3) -> DVec3 {
-        p * self.scale + self.trans
+        self.frame().to_mesh(p)
     }
 
     /// Every sample far enough from the surface to have a reliable side

@@ -4,13 +4,9 @@
 //! genus reached; the repaired mesh) and the verdict ([`verdict`]: the mesh checked, measured
 //! against every sample, and what the caller should know put in the report).
 //!
-//! The repair steps, one file each: `islands.rs` (components), `dent.rs` (wrong sides),
-//! `clear.rs` (sample spheres), `genus.rs` (a known genus), over the mesh edits of `edit.rs`.
+//! The repair steps are `rfta-repair`'s; `islands.rs` holds the verdicts it removes components
+//! by.
 
-mod clear;
-mod dent;
-mod edit;
-mod genus;
 mod islands;
 #[cfg(test)]
 mod tests;
@@ -26,11 +22,10 @@ use crate::normalize::UnitBox;
 use crate::rounds::Rounds;
 use crate::{Params, Reconstruction, Report, Result, Stage, check, consistency};
 
-use clear::{CLEAR_BELOW, PUSH_DEPTH, clear_spheres, push_out_of_spheres};
-use dent::dent_wrong_side;
-use genus::to_genus;
-use islands::{
-    Island, face_components, inverted_and_unenclosed, judge, remove_islands, signed_volume,
+use islands::{inverted_and_unenclosed, judge};
+use rfta_repair::{
+    CLEAR_BELOW, Island, PUSH_DEPTH, clear_spheres, dent_wrong_side, face_components,
+    push_out_of_spheres, remove_islands, signed_volume, to_genus,
 };
 
 /// The last solve on the final points, and the [`Reconstruction`] in the input's coordinates.
@@ -155,12 +150,14 @@ fn repair(
     let near = SphereTree::with_indices(&unit.spheres, &near);
     // Dents before clearing the spheres (which can then clear what a dent's faces enter) and
     // after it (for the samples a move out of a sphere left on the wrong side).
-    report.dents = dent_wrong_side(&mut mesh, samples);
+    let h = consistency::spacing(samples);
+    report.dents = dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
     let before = mesh.vertices.clone();
-    push_out_of_spheres(&mut mesh, unit, &near, PUSH_DEPTH * unit.spacing());
+    let spheres = unit.sphere_set();
+    push_out_of_spheres(&mut mesh, &spheres, &near, PUSH_DEPTH * unit.spacing());
     report.vertices_added = clear_spheres(
         &mut mesh,
-        unit,
+        &spheres,
         CLEAR_BELOW * r_own,
         PUSH_DEPTH * unit.spacing(),
     );
@@ -170,12 +167,17 @@ fn repair(
         .filter(|(a, b)| a != b)
         .count()
         + report.vertices_added;
-    report.dents += dent_wrong_side(&mut mesh, samples);
+    report.dents += dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
     report.timings.push(("spheres cleared".into(), t.elapsed()));
     if let Some(genus) = params.genus {
         let t = Instant::now();
-        (report.components_joined, report.handles_cut) =
-            to_genus(&mut mesh, genus, consistency::spacing(samples));
+        (report.components_joined, report.handles_cut) = to_genus(
+            &mut mesh,
+            genus,
+            h,
+            consistency::THIN_LOOP,
+            consistency::THIN_LOOP_MAX_GENUS,
+        );
         report.timings.push(("topology".into(), t.elapsed()));
     }
     report.cavities = face_components(&mesh)

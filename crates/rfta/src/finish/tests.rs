@@ -1,25 +1,13 @@
-//! The repair steps of the final step, on meshes and samples with known answers.
+//! The final step's repair on the pipeline's unit box, and its verdicts on components, on meshes
+//! and samples with known answers.
 
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Aabb, shapes};
 
-use super::clear::*;
-use super::dent::*;
+use rfta_repair::{Island, clear_spheres, push_out_of_spheres, remove_islands};
+
 use super::islands::*;
 use super::*;
-
-/// Eight samples 0.2 apart, about a spacing beyond the unit sphere, with its exact distances:
-/// they set the spacing of the dent tests.
-fn far_samples() -> (Vec<DVec3>, Vec<f64>) {
-    let positions: Vec<DVec3> = (0..8)
-        .map(|k| {
-            let bit = |j: u32| f64::from((k >> j) & 1) * 0.2;
-            DVec3::new(bit(0), bit(1), 2.0 + bit(2))
-        })
-        .collect();
-    let values = positions.iter().map(|p| p.length() - 1.0).collect();
-    (positions, values)
-}
 
 /// The exact distance to the sphere of radius 0.5 on the 21^3 grid over [-1, 1]^3.
 fn ball_grid() -> SdfSamples {
@@ -28,78 +16,6 @@ fn ball_grid() -> SdfSamples {
         .map(|i| grid.position(i).length() - 0.5)
         .collect();
     SdfSamples::grid(grid, values).expect("samples")
-}
-
-fn winding(mesh: &TriMesh, p: DVec3) -> f64 {
-    rfta_mesh::MeshIndex::new(mesh)
-        .expect("mesh")
-        .winding_number(p)
-}
-
-#[test]
-fn a_dent_puts_a_sample_whose_small_sphere_a_face_cuts_on_its_side() {
-    let mut mesh = shapes::icosphere(1.0, 2);
-    let [a, b, c] = mesh.triangle(0);
-    let n = (b - a).cross(c - a).normalize();
-    let centroid = (a + b + c) / 3.0;
-    // Eight far samples (0.2 apart) set the spacing; the ninth lies 0.003 inside face 0 and
-    // says "outside, 0.01 from the surface": its sphere is cut by the face, no vertex in it.
-    let (mut positions, mut values) = far_samples();
-    let wrong = centroid - 0.003 * n;
-    positions.push(wrong);
-    values.push(0.01);
-    // A sample on its side, equally close, changes nothing.
-    let right = (a + 2.0 * b + 3.0 * c) / 6.0 + 0.003 * n;
-    positions.push(right);
-    values.push(0.01);
-    let samples = SdfSamples::scattered(positions, values).expect("samples");
-    assert!(winding(&mesh, wrong) > 0.5, "inside before");
-    let faces = mesh.faces.len();
-    assert_eq!(dent_wrong_side(&mut mesh, &samples), 1);
-    assert_eq!(mesh.faces.len(), faces + 2);
-    assert!(winding(&mesh, wrong) < 0.5, "outside after");
-    assert!(winding(&mesh, right) < 0.5);
-    let topology = rfta_mesh::Topology::of(&mesh);
-    assert!(topology.is_watertight() && topology.is_consistently_oriented());
-    // Its sphere is clear of the dent's apex.
-    let apex = mesh.vertices[mesh.vertices.len() - 1];
-    assert!(apex.distance(wrong) > 0.01);
-}
-
-/// The same where the mesh's point nearest the sample is on an edge (both faces beside it
-/// split, 2 faces more each) or a vertex (the vertex moves, no face is added); the sample
-/// ends on its side and the mesh stays closed.
-#[test]
-fn a_dent_at_an_edge_or_a_vertex_puts_the_sample_on_its_side() {
-    for at_vertex in [false, true] {
-        let mut mesh = shapes::icosphere(1.0, 2);
-        let [a, b, _] = mesh.triangle(0);
-        let on = if at_vertex { a } else { (a + b) / 2.0 };
-        // Inside the sphere, 0.003 under the surface point, says "outside, 0.01 away".
-        let wrong = on * (1.0 - 0.003 / on.length());
-        let (mut positions, mut values) = far_samples();
-        positions.push(wrong);
-        values.push(0.01);
-        let samples = SdfSamples::scattered(positions, values).expect("samples");
-        assert!(winding(&mesh, wrong) > 0.5, "inside before");
-        let (faces, vertices) = (mesh.faces.len(), mesh.vertices.len());
-        assert_eq!(
-            dent_wrong_side(&mut mesh, &samples),
-            1,
-            "vertex {at_vertex}"
-        );
-        let more = if at_vertex { (0, 0) } else { (2, 1) };
-        assert_eq!(
-            (mesh.faces.len(), mesh.vertices.len()),
-            (faces + more.0, vertices + more.1)
-        );
-        assert!(
-            winding(&mesh, wrong) < 0.5,
-            "outside after (vertex {at_vertex})"
-        );
-        let topology = rfta_mesh::Topology::of(&mesh);
-        assert!(topology.is_watertight() && topology.is_consistently_oriented());
-    }
 }
 
 fn union(parts: &[TriMesh]) -> TriMesh {
@@ -139,7 +55,7 @@ fn pushed_vertices_leave_every_sphere_and_others_stay() {
     let mut sunk = shapes::icosphere(0.45, 3);
     assert!(deepest(&sunk) > 0.02, "the test surface must enter spheres");
     let before = sunk.clone();
-    push_out_of_spheres(&mut sunk, &unit, &tree, depth);
+    push_out_of_spheres(&mut sunk, &unit.sphere_set(), &tree, depth);
     let moved = before
         .vertices
         .iter()
@@ -153,14 +69,18 @@ fn pushed_vertices_leave_every_sphere_and_others_stay() {
     }
     let mut exact = shapes::icosphere(0.5, 3);
     let before = exact.clone();
-    push_out_of_spheres(&mut exact, &unit, &tree, depth);
+    push_out_of_spheres(&mut exact, &unit.sphere_set(), &tree, depth);
     assert_eq!(exact, before);
 }
 
 /// The deepest entry of any face of `mesh` (samples' coordinates) into the spheres of `unit`,
 /// in sample spacings, by brute force.
 fn deepest_entry(unit: &UnitBox, mesh: &TriMesh) -> f64 {
-    let part = in_unit_box(mesh, unit);
+    let frame = unit.frame();
+    let part = TriMesh {
+        vertices: mesh.vertices.iter().map(|&v| frame.to_frame(v)).collect(),
+        faces: mesh.faces.clone(),
+    };
     unit.spheres
         .iter()
         .map(|s| {
@@ -192,7 +112,7 @@ fn cleared_spheres_are_left_by_faces_too() {
         deepest_entry(&unit, &mesh)
     );
     let depth = PUSH_DEPTH * unit.spacing();
-    let added = clear_spheres(&mut mesh, &unit, f64::INFINITY, depth);
+    let added = clear_spheres(&mut mesh, &unit.sphere_set(), f64::INFINITY, depth);
     assert!(added > 0);
     let entry = deepest_entry(&unit, &mesh);
     assert!(entry < consistency::ENTER_MARGIN, "{entry}");

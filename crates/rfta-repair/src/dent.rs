@@ -3,16 +3,16 @@
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, TriMesh};
 
-use super::edit::{Incidence, Splitter};
-use crate::consistency;
+use crate::edit::{Incidence, Splitter};
 
 /// Samples this close to the surface (in spacings) are the ones [`dent_wrong_side`] looks at.
-pub(super) const DENT_BELOW: f64 = 0.5;
+pub const DENT_BELOW: f64 = 0.5;
 
 /// How far beyond its sphere a dent's new vertex lands, in sample spacings.
-pub(super) const DENT_MARGIN: f64 = 0.05;
+pub const DENT_MARGIN: f64 = 0.05;
 
-/// A sample less than [`DENT_BELOW`] spacings from the surface, with the mesh as near, on the
+/// A sample less than [`DENT_BELOW`] spacings `h` from the surface (and more than `sign_margin`:
+/// nearer, its side is not reliable), with the mesh as near, on the
 /// wrong side of the mesh: a face cuts its small sphere, or passes just beyond it (the faces are
 /// about a quarter of a spacing across, so no vertex need lie inside, and moving the surface
 /// away from the sample would leave it on the wrong side). The mesh's point nearest the sample
@@ -21,9 +21,13 @@ pub(super) const DENT_MARGIN: f64 = 0.05;
 /// or both faces beside the edge, split), or the vertex itself. The sample then lies in a shallow
 /// dent, on its own side. Not made where a face would turn over. Samples are taken in order, so
 /// the result does not depend on the thread count. Returns how many dents were made.
-pub(super) fn dent_wrong_side(mesh: &mut TriMesh, samples: &SdfSamples) -> usize {
+pub fn dent_wrong_side(
+    mesh: &mut TriMesh,
+    samples: &SdfSamples,
+    h: f64,
+    sign_margin: f64,
+) -> usize {
     use rayon::prelude::*;
-    let h = consistency::spacing(samples);
     let Ok(index) = rfta_mesh::MeshIndex::new(mesh) else {
         return 0;
     };
@@ -34,7 +38,7 @@ pub(super) fn dent_wrong_side(mesh: &mut TriMesh, samples: &SdfSamples) -> usize
         .filter_map(|i| {
             let (p, s) = (samples.position(i), values[i]);
             let r = s.abs();
-            if r <= consistency::SIGN_MARGIN * h || r >= reach {
+            if r <= sign_margin * h || r >= reach {
                 return None;
             }
             let c = index.closest_point_within(p, reach * reach)?;

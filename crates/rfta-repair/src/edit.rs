@@ -6,7 +6,7 @@ use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
 /// How many times [`apply_moves`] goes over the vertices.
-pub(super) const MOVE_SWEEPS: usize = 8;
+pub const MOVE_SWEEPS: usize = 8;
 
 /// Moves each vertex towards its `moved_to` position where it has one without folding the
 /// surface: in index order, each takes the largest of its whole remaining move, half, a quarter
@@ -14,7 +14,7 @@ pub(super) const MOVE_SWEEPS: usize = 8;
 /// given where its neighbours are by then; [`MOVE_SWEEPS`] sweeps, so that a vertex held back by
 /// a neighbour (at sharp features the faces can be a fiftieth of a spacing across) follows it.
 /// `incident` holds the mesh's faces around each vertex. Returns the vertices that moved.
-pub(super) fn apply_moves(
+pub fn apply_moves(
     mesh: &mut TriMesh,
     incident: &Incidence,
     moved_to: &[Option<DVec3>],
@@ -64,14 +64,15 @@ pub(super) fn apply_moves(
 }
 
 /// The faces around each vertex of a mesh.
-pub(super) struct Incidence {
+pub struct Incidence {
     /// Where each vertex's faces start in `faces` (one more entry than vertices).
     start: Vec<u32>,
     faces: Vec<u32>,
 }
 
 impl Incidence {
-    pub(super) fn of(mesh: &TriMesh) -> Self {
+    /// The faces around each vertex of `mesh`.
+    pub fn of(mesh: &TriMesh) -> Self {
         let mut start = vec![0u32; mesh.vertices.len() + 1];
         for face in &mesh.faces {
             for &v in face {
@@ -92,7 +93,8 @@ impl Incidence {
         Self { start, faces }
     }
 
-    pub(super) fn faces(&self, v: u32) -> &[u32] {
+    /// The faces around vertex `v`.
+    pub fn faces(&self, v: u32) -> &[u32] {
         &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
     }
 }
@@ -100,13 +102,14 @@ impl Incidence {
 /// Puts new vertices on a mesh's faces or edges, each face at most once (faces a split has made
 /// or changed are left alone until the next [`Splitter`]), given the faces around each vertex
 /// before the first split.
-pub(super) struct Splitter<'a> {
+pub struct Splitter<'a> {
     incident: &'a Incidence,
-    pub(super) touched: Vec<bool>,
+    pub(crate) touched: Vec<bool>,
 }
 
 impl<'a> Splitter<'a> {
-    pub(super) fn new(incident: &'a Incidence, mesh: &TriMesh) -> Self {
+    /// A splitter for `mesh`, whose faces around each vertex `incident` holds.
+    pub fn new(incident: &'a Incidence, mesh: &TriMesh) -> Self {
         Self {
             incident,
             touched: vec![false; mesh.faces.len()],
@@ -118,13 +121,7 @@ impl<'a> Splitter<'a> {
     /// the face beside that edge split in two each. Not made (`None`) near a vertex, where a face
     /// was split already, or where a new face would turn against the face it is part of (`at`
     /// off the face). Returns the new vertex.
-    pub(super) fn split(
-        &mut self,
-        mesh: &mut TriMesh,
-        f: usize,
-        b: [f64; 3],
-        at: DVec3,
-    ) -> Option<u32> {
+    pub fn split(&mut self, mesh: &mut TriMesh, f: usize, b: [f64; 3], at: DVec3) -> Option<u32> {
         if self.touched.get(f).is_none_or(|&t| t) {
             return None;
         }
@@ -189,7 +186,7 @@ impl<'a> Splitter<'a> {
     }
 
     /// Moves vertex `v` to `to`, unless a face around it was split already or would turn over.
-    pub(super) fn move_vertex(&mut self, mesh: &mut TriMesh, v: u32, to: DVec3) -> bool {
+    pub fn move_vertex(&mut self, mesh: &mut TriMesh, v: u32, to: DVec3) -> bool {
         let around = self.incident.faces(v);
         if around.iter().any(|&f| self.touched[f as usize]) {
             return false;

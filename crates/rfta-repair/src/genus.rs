@@ -1,20 +1,25 @@
-//! A known genus ([`crate::Params::genus`]): every component joined to the largest, then the
-//! shortest loops around handles cut until the genus is reached.
+//! A known genus: every component joined to the largest, then the shortest loops around handles
+//! cut until the genus is reached.
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
-use super::islands::face_components;
-use crate::consistency;
+use crate::components::face_components;
 
 /// How far apart the two sides of a cut handle move, in sample spacings.
-pub(super) const CUT_GAP: f64 = 0.05;
+const CUT_GAP: f64 = 0.05;
 
-/// [`Params::genus`]: every component joined to the largest, then the shortest loops around
-/// handles cut until the genus is `genus`; loops are searched below `pi` spacings first, then
-/// below twice and four times that, and so on to 64 spacings, on meshes of genus up to
-/// [`consistency::THIN_LOOP_MAX_GENUS`]. Returns the components joined and the handles cut.
-pub(super) fn to_genus(mesh: &mut TriMesh, genus: usize, h: f64) -> (usize, usize) {
+/// A known genus: every component joined to the largest, then the shortest loops around handles
+/// cut until the genus is `genus`; loops are searched below `first` spacings `h` first, then below
+/// twice and four times that, and so on to 64 spacings, on meshes of genus up to `max_genus`
+/// (the search's memory grows with it). Returns the components joined and the handles cut.
+pub fn to_genus(
+    mesh: &mut TriMesh,
+    genus: usize,
+    h: f64,
+    first: f64,
+    max_genus: i64,
+) -> (usize, usize) {
     let mut joined = 0;
     for (a, b) in nearest_faces_to_largest(mesh) {
         if rfta_mesh::join(mesh, a, b) {
@@ -22,11 +27,11 @@ pub(super) fn to_genus(mesh: &mut TriMesh, genus: usize, h: f64) -> (usize, usiz
         }
     }
     let mut cut = 0;
-    let mut bound = consistency::THIN_LOOP;
+    let mut bound = first;
     while bound <= 64.0 {
         let Some(excess) = rfta_mesh::Topology::of(mesh)
             .genus()
-            .filter(|&g| g <= consistency::THIN_LOOP_MAX_GENUS)
+            .filter(|&g| g <= max_genus)
             .and_then(|g| usize::try_from(g).ok())
             .and_then(|g| g.checked_sub(genus))
             .filter(|&e| e > 0)
@@ -70,7 +75,7 @@ pub(super) fn to_genus(mesh: &mut TriMesh, genus: usize, h: f64) -> (usize, usiz
 /// nearest to it: at its vertex nearest the largest, the face whose centre is nearest the
 /// largest's closest point, and the face that point lies on. Faces of different components, so
 /// the joins can be made one after another ([`rfta_mesh::join`] keeps the other faces' indices).
-pub(super) fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
+fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
     let parts = face_components(mesh);
     let Some(largest) = (0..parts.len()).max_by_key(|&i| (parts[i].len(), std::cmp::Reverse(i)))
     else {

@@ -6,27 +6,27 @@ use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 use rfta_sphere_tree::SphereTree;
 
-use super::edit::{Incidence, Splitter, apply_moves};
-use crate::normalize::UnitBox;
+use crate::Spheres;
+use crate::edit::{Incidence, Splitter, apply_moves};
 
 /// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
-/// margin at which [`crate::consistency`] counts a sphere as entered, and large enough that the
+/// margin at which the consistency check (`rfta::consistency`) counts a sphere as entered, and large enough that the
 /// sphere tree prunes the many spheres the surface merely touches.
-pub(super) const PUSH_DEPTH: f64 = 0.02;
+pub const PUSH_DEPTH: f64 = 0.02;
 
 /// Passes of [`push_out_of_spheres`] per vertex: leaving the deepest sphere can land a vertex in
 /// a neighbour, which the next pass leaves in turn.
-pub(super) const PUSH_PASSES: usize = 8;
+pub const PUSH_PASSES: usize = 8;
 
 /// The surface may not enter a sample sphere (Sellán et al. 2024, §3), yet the final screened
 /// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners,
-/// thin parts). Each vertex inside some sphere by more than `depth` (unit box) moves radially onto
+/// thin parts). Each vertex inside some sphere by more than `depth` (in the spheres' frame) moves radially onto
 /// the boundary of the sphere it is deepest in, up to [`PUSH_PASSES`] times; the connectivity
 /// stays, and the moves are taken without folding the surface ([`apply_moves`]). The targets do
 /// not depend on one another, so the result does not depend on the thread count.
-pub(super) fn push_out_of_spheres(
+pub fn push_out_of_spheres(
     mesh: &mut TriMesh,
-    unit: &UnitBox,
+    spheres: &Spheres<'_>,
     tree: &SphereTree,
     depth: f64,
 ) {
@@ -35,14 +35,14 @@ pub(super) fn push_out_of_spheres(
         .vertices
         .par_iter()
         .map_init(Vec::new, |hits, &v| {
-            let mut p = unit.to_unit(v);
+            let mut p = spheres.frame.to_frame(v);
             let mut moved = false;
             for _ in 0..PUSH_PASSES {
                 tree.spheres_containing_into(p, 1, -depth, None, hits);
                 let Some(&(_, j)) = hits.first() else {
                     break;
                 };
-                let s = unit.spheres[j as usize];
+                let s = spheres.spheres[j as usize];
                 let dir = (p - s.center).normalize_or_zero();
                 if dir == DVec3::ZERO {
                     break;
@@ -50,7 +50,7 @@ pub(super) fn push_out_of_spheres(
                 p = s.center + dir * s.radius;
                 moved = true;
             }
-            moved.then(|| unit.to_input(p))
+            moved.then(|| spheres.frame.to_mesh(p))
         })
         .collect();
     apply_moves(mesh, &Incidence::of(mesh), &moved_to);
@@ -58,24 +58,28 @@ pub(super) fn push_out_of_spheres(
 
 /// Rounds of [`clear_spheres`]: each finds the spheres the mesh still enters and moves the
 /// vertices inside them out.
-pub(super) const CLEAR_ROUNDS: usize = 6;
+pub const CLEAR_ROUNDS: usize = 6;
 
-/// [`clear_spheres`] looks at spheres smaller than this many owner radii ([`Params::owner_band`]
+/// [`clear_spheres`] looks at spheres smaller than this many owner radii (`rfta::Params::owner_band`
 /// spacings on grids). A wider sphere tangent at the same point along the same normal enters a
 /// bulge at most by a few hundredths of a spacing more (a bulge `w` wide enters a sphere of
 /// radius `t` by about its height less `w^2 / 2t`): below the margin at which
-/// [`crate::consistency`] counts an entry, where the many far spheres' queries would cost most
+/// the consistency check (`rfta::consistency`) counts an entry, where the many far spheres' queries would cost most
 /// (nine in ten of the 129^3 bunny's samples).
-pub(super) const CLEAR_BELOW: f64 = 3.0;
+pub const CLEAR_BELOW: f64 = 3.0;
 
 /// The farthest a vertex moves in [`clear_spheres`], in sample spacings: an entry deeper than
 /// this is not a smooth surface's overshoot but a wrong part, which moving vertices would tear.
-pub(super) const CLEAR_REACH: f64 = 0.5;
+pub const CLEAR_REACH: f64 = 0.5;
 
-/// The mesh in the unit box.
-pub(super) fn in_unit_box(mesh: &TriMesh, unit: &UnitBox) -> TriMesh {
+/// The mesh in the spheres' frame.
+pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
     TriMesh {
-        vertices: mesh.vertices.iter().map(|&v| unit.to_unit(v)).collect(),
+        vertices: mesh
+            .vertices
+            .iter()
+            .map(|&v| spheres.frame.to_frame(v))
+            .collect(),
         faces: mesh.faces.clone(),
     }
 }
@@ -85,28 +89,28 @@ pub(super) fn in_unit_box(mesh: &TriMesh, unit: &UnitBox) -> TriMesh {
 /// them (a bulge at a corner, where many far spheres touch the same point), and the near ones are
 /// cut wherever the shape is sharper than the surface (edges, corners, thin parts).
 ///
-/// Each round finds every sphere (of `all`) the mesh enters by more than `depth` (unit box): the
+/// Each round finds every sphere (of `all`) the mesh enters by more than `depth` (in the spheres' frame): the
 /// first round every sphere, the later ones those entered before and those holding a vertex that
 /// moved. Where no vertex of the cutting face lies in the sphere, a vertex is put at the face's
-/// point nearest the centre ([`split_where_entered`]). Then each vertex inside entered spheres
+/// point nearest the centre (`split_where_entered`). Then each vertex inside entered spheres
 /// moves along its normal (inward out of positive spheres, outward out of negative ones) or
 /// radially away from the deepest sphere's centre, whichever leaves all of them sooner
-/// ([`leave_along`]), as long as that is within [`CLEAR_REACH`] and meets no sphere of the other
+/// (`leave_along`), as long as that is within [`CLEAR_REACH`] and meets no sphere of the other
 /// sign; the moves are taken without folding the surface ([`apply_moves`]). At most
 /// [`CLEAR_ROUNDS`] rounds. Vertices move in index order, so the result does not depend on the
 /// thread count. Returns how many vertices were added.
-pub(super) fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, depth: f64) -> usize {
+pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, depth: f64) -> usize {
     use rayon::prelude::*;
-    let reach = CLEAR_REACH * unit.spacing();
+    let reach = CLEAR_REACH * spheres.spacing;
     let mut added = 0;
     // The spheres entered in the last round, each with the face that came nearest its centre.
     let mut last: Vec<(u32, rfta_mesh::ClosestPoint)> = Vec::new();
     // The faces around each vertex: only splits change them.
     let mut incident = Incidence::of(mesh);
     for round in 0..CLEAR_ROUNDS {
-        let part = in_unit_box(mesh, unit);
+        let part = in_frame(mesh, spheres);
         let entry = |i: u32| {
-            let s = unit.spheres[i as usize];
+            let s = spheres.spheres[i as usize];
             let lo = s.radius - depth;
             (lo > 0.0).then_some((s.center, lo))
         };
@@ -116,9 +120,9 @@ pub(super) fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, dept
             let Ok(index) = rfta_mesh::MeshIndex::new(&part) else {
                 break;
             };
-            (0..unit.len() as u32)
+            (0..spheres.spheres.len() as u32)
                 .into_par_iter()
-                .filter(|&i| unit.spheres[i as usize].radius < below)
+                .filter(|&i| spheres.spheres[i as usize].radius < below)
                 .filter_map(|i| {
                     let (c, lo) = entry(i)?;
                     Some((i, index.closest_point_within(c, lo * lo)?))
@@ -135,22 +139,22 @@ pub(super) fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, dept
         if found.is_empty() {
             break;
         }
-        let splits = split_where_entered(mesh, &part, &incident, unit, &found, depth);
+        let splits = split_where_entered(mesh, &part, &incident, spheres, &found, depth);
         added += splits;
         let part = if splits > 0 {
             incident = Incidence::of(mesh);
-            in_unit_box(mesh, unit)
+            in_frame(mesh, spheres)
         } else {
             part
         };
         let entered: Vec<u32> = found.iter().map(|&(i, _)| i).collect();
-        let tree = SphereTree::with_indices(&unit.spheres, &entered);
+        let tree = SphereTree::with_indices(spheres.spheres, &entered);
         // The vertices inside entered spheres: each sphere's cap, grown from the face nearest
         // its centre (the face's slot holds a piece of it after a split).
         let mut inside: Vec<u32> = found
             .par_iter()
             .flat_map_iter(|&(i, ref c)| {
-                let s = unit.spheres[i as usize];
+                let s = spheres.spheres[i as usize];
                 let holds =
                     |v: u32| (part.vertices[v as usize] - s.center).length() < s.radius - depth;
                 let mut cap: Vec<u32> = part.faces[c.face as usize]
@@ -181,25 +185,25 @@ pub(super) fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, dept
                 let p = part.vertices[v as usize];
                 tree.spheres_containing_into(p, usize::MAX, -depth, None, hits);
                 let &(_, deepest) = hits.first()?;
-                let positive = unit.values[deepest as usize] > 0.0;
+                let positive = spheres.values[deepest as usize] > 0.0;
                 let n: DVec3 = incident
                     .faces(v)
                     .iter()
                     .map(|&f| part.face_normal_scaled(f as usize))
                     .sum();
                 let along = n.normalize_or_zero() * if positive { -1.0 } else { 1.0 };
-                let radial = (p - unit.spheres[deepest as usize].center).normalize_or_zero();
+                let radial = (p - spheres.spheres[deepest as usize].center).normalize_or_zero();
                 let start = std::mem::take(hits);
                 [along, radial]
                     .into_iter()
                     .filter(|d| *d != DVec3::ZERO)
                     .filter_map(|dir| {
                         hits.clone_from(&start);
-                        leave_along(unit, &tree, p, dir, positive, depth, reach, hits)
+                        leave_along(spheres, &tree, p, dir, positive, depth, reach, hits)
                             .map(|t| (t, dir))
                     })
                     .min_by(|a, b| a.0.total_cmp(&b.0))
-                    .map(|(t, dir)| unit.to_input(p + dir * t))
+                    .map(|(t, dir)| spheres.frame.to_mesh(p + dir * t))
             })
             .collect();
         for (&v, t) in inside.iter().zip(targets) {
@@ -218,7 +222,7 @@ pub(super) fn clear_spheres(mesh: &mut TriMesh, unit: &UnitBox, below: f64, dept
 /// face `seed` or its neighbours through such faces, if there are any: where a sphere was entered
 /// before a round of [`clear_spheres`], the part still inside it after the round surrounds the
 /// face that was nearest its centre.
-pub(super) fn nearest_around(
+fn nearest_around(
     part: &TriMesh,
     incident: &Incidence,
     seed: u32,
@@ -257,14 +261,14 @@ pub(super) fn nearest_around(
 }
 
 /// Where no vertex of the nearest face lies inside an entered sphere (`found`: the sphere and the
-/// mesh's nearest point to its centre, on `part`, the mesh in the unit box, whose faces around
+/// mesh's nearest point to its centre, on `part`, the mesh in the spheres' frame, whose faces around
 /// each vertex `incident` holds), a vertex is put at that nearest point ([`Splitter::split`]; the
 /// new faces lie in the old ones' planes). Returns how many vertices were added.
-pub(super) fn split_where_entered(
+fn split_where_entered(
     mesh: &mut TriMesh,
     part: &TriMesh,
     incident: &Incidence,
-    unit: &UnitBox,
+    spheres: &Spheres<'_>,
     found: &[(u32, rfta_mesh::ClosestPoint)],
     depth: f64,
 ) -> usize {
@@ -272,7 +276,7 @@ pub(super) fn split_where_entered(
     let mut added = 0;
     for &(i, ref c) in found {
         let f = c.face as usize;
-        let s = unit.spheres[i as usize];
+        let s = spheres.spheres[i as usize];
         // A face split in this call holds a new vertex, which `part` does not have.
         let holds = |v: u32| {
             part.vertices
@@ -296,8 +300,8 @@ pub(super) fn split_where_entered(
 /// than `depth` (`hits` holds those at `p`), if it does within `reach` and meets only spheres of
 /// the sign `positive`.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn leave_along(
-    unit: &UnitBox,
+fn leave_along(
+    spheres: &Spheres<'_>,
     tree: &SphereTree,
     p: DVec3,
     dir: DVec3,
@@ -309,10 +313,10 @@ pub(super) fn leave_along(
     let mut t = 0.0f64;
     for _ in 0..8 {
         for &(_, j) in hits.iter() {
-            if (unit.values[j as usize] > 0.0) != positive {
+            if (spheres.values[j as usize] > 0.0) != positive {
                 return None;
             }
-            let s = unit.spheres[j as usize];
+            let s = spheres.spheres[j as usize];
             let o = p - s.center;
             let b = o.dot(dir);
             let disc = b * b - (o.length_squared() - s.radius * s.radius);

@@ -1,0 +1,89 @@
+//! Mesh repair against signed distance samples: what the last step of rfta (Reach for the Arcs,
+//! Sellán et al. 2024) does to the screened Poisson surface so that it agrees with the samples,
+//! usable without the pipeline.
+//!
+//! - [`remove_islands`]: connected components removed by the caller's verdicts ([`Island`]),
+//!   the largest always kept; [`face_components`], [`signed_volume`] of a part.
+//! - [`dent_wrong_side`]: the surface moved past samples near it that lie on its wrong side.
+//! - [`push_out_of_spheres`], [`clear_spheres`]: vertices out of the sample spheres the surface
+//!   enters (the surface may not enter a sample's sphere, §3 of the paper), faces split where they
+//!   cut a sphere no vertex is in.
+//! - [`to_genus`]: a known genus reached, components joined by tubes and the shortest handle
+//!   loops cut ([`rfta_mesh::join`], [`rfta_mesh::cut_along`]).
+//! - [`edit`]: the edits all of these are made of, none of which turns a face over.
+//!
+//! Spheres come as [`Spheres`]: their centres and radii in a frame of their own (the pipeline's
+//! unit box), the samples' values (for their signs) and the [`Frame`] that maps the mesh's
+//! coordinates there.
+//!
+//! # Example
+//! ```
+//! use rfta_geom::{glam::DVec3, shapes, Sphere};
+//! use rfta_repair::{Frame, Spheres, clear_spheres};
+//!
+//! // A ball of radius 1 and an outside sample whose sphere (radius 0.3) it enters by 0.2.
+//! let mut mesh = shapes::icosphere(1.0, 3);
+//! let spheres = [Sphere::new(DVec3::new(1.1, 0.0, 0.0), 0.3)];
+//! let set = Spheres { spheres: &spheres, values: &[0.3], frame: Frame::IDENTITY, spacing: 1.0 };
+//! clear_spheres(&mut mesh, &set, f64::INFINITY, 0.001);
+//! assert!(mesh.vertices.iter().all(|v| v.distance(spheres[0].center) > 0.3 - 0.001 - 1e-9));
+//! ```
+
+mod clear;
+mod components;
+mod dent;
+pub mod edit;
+mod genus;
+
+use rfta_geom::Sphere;
+use rfta_geom::glam::DVec3;
+
+pub use clear::{
+    CLEAR_BELOW, CLEAR_REACH, CLEAR_ROUNDS, PUSH_DEPTH, PUSH_PASSES, clear_spheres,
+    push_out_of_spheres,
+};
+pub use components::{Island, face_components, remove_islands, signed_volume};
+pub use dent::{DENT_BELOW, DENT_MARGIN, dent_wrong_side};
+pub use edit::apply_moves;
+pub use genus::to_genus;
+
+/// The map from a mesh's coordinates into the spheres' frame: `(p - origin) / scale`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frame {
+    /// The mesh point at the frame's origin.
+    pub origin: DVec3,
+    /// One unit of the frame, in the mesh's units.
+    pub scale: f64,
+}
+
+impl Frame {
+    /// The mesh's own coordinates.
+    pub const IDENTITY: Frame = Frame {
+        origin: DVec3::ZERO,
+        scale: 1.0,
+    };
+
+    /// A point of the mesh's coordinates in the frame.
+    pub fn to_frame(&self, p: DVec3) -> DVec3 {
+        (p - self.origin) / self.scale
+    }
+
+    /// A point of the frame in the mesh's coordinates.
+    pub fn to_mesh(&self, p: DVec3) -> DVec3 {
+        p * self.scale + self.origin
+    }
+}
+
+/// Sample spheres to repair a mesh against.
+#[derive(Debug, Clone, Copy)]
+pub struct Spheres<'a> {
+    /// Centres and radii `|s_i|`, in the frame.
+    pub spheres: &'a [Sphere],
+    /// The samples' values (negative inside), one per sphere: their signs say which side of the
+    /// surface each sphere lies on.
+    pub values: &'a [f64],
+    /// From the mesh's coordinates to the spheres'.
+    pub frame: Frame,
+    /// The sample spacing, in the frame: how far a vertex may move ([`clear_spheres`]).
+    pub spacing: f64,
+}
