@@ -66,9 +66,31 @@ impl Rng {
     }
 }
 
+/// A batch of `k` positions drawn uniformly *with replacement* from `0..n` with `seed` (the
+/// reference's batching, Sellán et al. 2024 §4.4: about `n (1 - exp(-k / n))` distinct ones), or
+/// `None` for all of them: `k` of 0, or of at least `n`.
+pub fn batch_with_replacement(n: usize, k: usize, seed: u64) -> Option<Vec<u32>> {
+    if k == 0 || k >= n {
+        return None;
+    }
+    let mut rng = Rng::new(seed);
+    Some((0..k).map(|_| rng.below(n as u64) as u32).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_batch_holds_positions_below_n_and_all_is_none() {
+        let b = batch_with_replacement(50, 20, 3).expect("a batch");
+        assert_eq!(b.len(), 20);
+        assert!(b.iter().all(|&i| i < 50));
+        assert_eq!(b, batch_with_replacement(50, 20, 3).expect("the same"));
+        assert!(b.windows(2).any(|w| w[0] != w[1]));
+        assert!(batch_with_replacement(50, 0, 3).is_none());
+        assert!(batch_with_replacement(50, 50, 3).is_none());
+    }
 
     #[test]
     fn uniform_doubles_have_the_right_mean_and_range() {

@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use obvhs::{BvhBuildParams, aabb::Aabb as ObAabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
-use rfta_geom::{Aabb, Sphere, glam::DVec3, glam::Vec3A, rng::Rng};
+use rfta_geom::{Aabb, Sphere, glam::DVec3, glam::Vec3A};
 
 /// A node: the box of its spheres' centres, their largest radius, the union of their boxes
 /// (for the reference-order traversal), and either two children or a range of spheres.
@@ -89,18 +89,13 @@ impl SphereTree {
     }
 
     /// A tree over a random batch: `batch_size` indices drawn uniformly *with replacement* from
-    /// `0..spheres.len()` with `seed` (the reference's batching, Sellán et al. 2024 §4.4), so about
-    /// `n (1 - exp(-b / n))` distinct spheres. A batch size of 0, or one of at least `n`, takes all.
+    /// `0..spheres.len()` with `seed` ([`rfta_geom::rng::batch_with_replacement`]). A batch size
+    /// of 0, or one of at least `n`, takes all.
     pub fn batch(spheres: &[Sphere], batch_size: usize, seed: u64) -> Self {
-        let n = spheres.len();
-        if batch_size == 0 || batch_size >= n {
-            return Self::new(spheres);
+        match rfta_geom::rng::batch_with_replacement(spheres.len(), batch_size, seed) {
+            Some(ids) => Self::with_indices(spheres, &ids),
+            None => Self::new(spheres),
         }
-        let mut rng = Rng::new(seed);
-        let ids: Vec<u32> = (0..batch_size)
-            .map(|_| rng.below(n as u64) as u32)
-            .collect();
-        Self::with_indices(spheres, &ids)
     }
 
     /// Number of (distinct) spheres in the tree.

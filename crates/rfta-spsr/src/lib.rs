@@ -15,7 +15,8 @@
 //! the samples, and the surface is extracted crack-free over the adaptive leaves.
 //!
 //! Everything is deterministic: the same input and parameters give the same mesh, bit for bit,
-//! whatever the number of threads.
+//! whatever the number of threads. The work runs on the caller's rayon pool (the global one, or
+//! one the caller installs: `pool.install(|| reconstruct(..))`).
 //!
 //! # Example
 //! ```
@@ -80,14 +81,6 @@ pub enum Error {
         /// The iso-value that was looked for.
         iso: f64,
     },
-    /// The thread pool could not be created.
-    #[error("could not start {threads} threads: {reason}")]
-    ThreadPool {
-        /// Requested thread count.
-        threads: usize,
-        /// What rayon said.
-        reason: String,
-    },
 }
 
 /// Result alias of this crate.
@@ -141,8 +134,6 @@ pub struct SpsrParams {
     pub iterations: usize,
     /// Conjugate-gradient iterations cap per depth below `full_depth`.
     pub base_iterations: usize,
-    /// Worker threads; `None` uses rayon's global pool. The result does not depend on it.
-    pub threads: Option<usize>,
 }
 
 impl Default for SpsrParams {
@@ -157,7 +148,6 @@ impl Default for SpsrParams {
             full_depth: 5,
             iterations: 8,
             base_iterations: 200,
-            threads: None,
         }
     }
 }
@@ -198,9 +188,6 @@ impl SpsrParams {
                 "samples per node must be finite and > 0, got {}",
                 self.samples_per_node
             )));
-        }
-        if self.threads == Some(0) {
-            return Err(Error::InvalidParams("threads must be at least 1".into()));
         }
         Ok(())
     }
@@ -249,9 +236,10 @@ pub struct Reconstruction {
 /// # Errors
 /// [`Error::TooFewPoints`] below 3 points, [`Error::DegenerateInput`] when all points coincide,
 /// [`Error::InvalidParams`], [`Error::NoSurface`] when the normals are so inconsistent that the
-/// solution has no level set, [`Error::ThreadPool`].
+/// solution has no level set.
 pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
-    Ok(in_pool(params, || run(points, params, &[], None, false))?.0)
+    params.validate()?;
+    Ok(run(points, params, &[], None, false)?.0)
 }
 
 /// A point the surface must leave on one side: inside (`inside: true`) or outside.
@@ -355,7 +343,8 @@ pub fn reconstruct_with_sides(
     sides: &[SidePoint],
     params: &SpsrParams,
 ) -> Result<Reconstruction> {
-    Ok(in_pool(params, || run(points, params, sides, None, false))?.0)
+    params.validate()?;
+    Ok(run(points, params, sides, None, false)?.0)
 }
 
 /// What one reconstruction leaves for the next, for clouds that change little from one solve to
@@ -416,9 +405,8 @@ impl Workspace {
         points: &OrientedPoints,
         params: &SpsrParams,
     ) -> Result<Reconstruction> {
-        let (out, warm) = in_pool(params, || {
-            run(points, params, &[], self.last.as_ref(), true)
-        })?;
+        params.validate()?;
+        let (out, warm) = run(points, params, &[], self.last.as_ref(), true)?;
         self.last = warm;
         Ok(out)
     }
@@ -426,22 +414,6 @@ impl Workspace {
     /// Forget the previous solution: the next solve starts cold.
     pub fn clear(&mut self) {
         self.last = None;
-    }
-}
-
-/// Runs `f` on `params.threads` threads (rayon's pool when unset).
-fn in_pool<T: Send>(params: &SpsrParams, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
-    params.validate()?;
-    match params.threads {
-        None => f(),
-        Some(t) => rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| Error::ThreadPool {
-                threads: t,
-                reason: e.to_string(),
-            })?
-            .install(f),
     }
 }
 

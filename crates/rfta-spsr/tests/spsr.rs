@@ -181,32 +181,11 @@ fn box_with_sharp_edges_10k_and_100k_depth_8() {
 fn same_mesh_at_one_and_two_threads() {
     let (p, n, _) = torus(20_000, 9);
     let points = OrientedPoints::new(p, n, None).expect("cloud");
-    let one = reconstruct(
-        &points,
-        &SpsrParams {
-            threads: Some(1),
-            ..depth8()
-        },
-    )
-    .expect("1 thread");
-    let two = reconstruct(
-        &points,
-        &SpsrParams {
-            threads: Some(2),
-            ..depth8()
-        },
-    )
-    .expect("2 threads");
+    let one = on(1, || reconstruct(&points, &depth8())).expect("1 thread");
+    let two = on(2, || reconstruct(&points, &depth8())).expect("2 threads");
     assert_eq!(one.mesh.faces, two.mesh.faces);
     assert_eq!(one.mesh.vertices, two.mesh.vertices);
-    let again = reconstruct(
-        &points,
-        &SpsrParams {
-            threads: Some(2),
-            ..depth8()
-        },
-    )
-    .expect("again");
+    let again = on(2, || reconstruct(&points, &depth8())).expect("again");
     assert_eq!(again.mesh.vertices, two.mesh.vertices);
 }
 
@@ -256,13 +235,13 @@ fn warm_start_converges_faster_and_stays_deterministic() {
     assert_eq!(again.mesh.vertices, cold.mesh.vertices);
     // The same sequence on one and two threads.
     let sequence = |threads| {
-        let mut ws = Workspace::new();
-        let params = |iterations| SpsrParams {
-            threads: Some(threads),
-            ..sweeps(iterations)
-        };
-        ws.reconstruct(&points, &params(4)).expect("first");
-        ws.reconstruct(&moved, &params(2)).expect("second").mesh
+        on(threads, || {
+            let mut ws = Workspace::new();
+            ws.reconstruct(&points, &sweeps(4)).expect("first");
+            ws.reconstruct(&moved, &sweeps(2))
+        })
+        .expect("second")
+        .mesh
     };
     let (one, two) = (sequence(1), sequence(2));
     assert_eq!(one.vertices, two.vertices);
@@ -326,10 +305,6 @@ fn bad_input_is_an_error_not_a_panic() {
         },
         SpsrParams {
             samples_per_node: 0.0,
-            ..SpsrParams::default()
-        },
-        SpsrParams {
-            threads: Some(0),
             ..SpsrParams::default()
         },
     ] {
@@ -439,4 +414,13 @@ fn a_side_point_beside_the_fine_cells_opens_a_cavity() {
     assert!(inside(&carved.mesh, DVec3::ZERO));
     assert!(inside(&carved.mesh, -centre));
     assert!(Topology::of(&carved.mesh).is_watertight());
+}
+
+/// Runs `f` on a rayon pool of `threads` workers.
+fn on<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(f)
 }

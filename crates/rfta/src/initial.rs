@@ -124,13 +124,10 @@ fn drawing(
 
 /// `b` indices drawn with replacement from `set` (all of it when `b` is 0 or at least its size).
 fn draw_batch(set: &[u32], b: usize, seed: u64) -> Vec<u32> {
-    if b == 0 || b >= set.len() {
-        return set.to_vec();
+    match rfta_geom::rng::batch_with_replacement(set.len(), b, seed) {
+        Some(at) => at.iter().map(|&k| set[k as usize]).collect(),
+        None => set.to_vec(),
     }
-    let mut rng = rfta_geom::rng::Rng::new(seed);
-    (0..b)
-        .map(|_| set[rng.below(set.len() as u64) as usize])
-        .collect()
 }
 
 fn merge_by_owner(parts: Vec<TangentPoints>) -> TangentPoints {

@@ -228,7 +228,6 @@ impl Params {
             screening: self.screening,
             box_scale: SPSR_BOX,
             full_depth: SPSR_FULL_DEPTH,
-            threads: None,
             ..SpsrParams::rfta_reference()
         }
     }

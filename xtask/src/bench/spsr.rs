@@ -263,10 +263,13 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
             let params = rfta_spsr::SpsrParams {
                 depth,
                 screening: 10.0,
-                threads: Some(threads),
                 ..rfta_spsr::SpsrParams::default()
             };
-            rfta_spsr::reconstruct(&points, &params)?.mesh
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()?
+                .install(|| rfta_spsr::reconstruct(&points, &params))?
+                .mesh
         }
         "poissonrecon" => poissonrecon_mesh(&points, depth)?,
         other => bail!("unknown solver {other}"),
