@@ -331,7 +331,8 @@ fn transport_checked(
 /// sphere, the empty-space sample nearest its centre projected onto it, then [`local_search`]
 /// against `tree` (a batch of the same sign set). Spheres that end infeasible, reach
 /// [`Params::owner_radius`], or have zero radius (a sample exactly on the surface gives no
-/// normal) get no point.
+/// normal) get no point. With `done`, 1 is added to it as each sphere of `set` is finished (for
+/// progress reports from another thread; the result does not depend on it).
 pub fn initial_points(
     spheres: &[Sphere],
     values: &[f64],
@@ -339,28 +340,7 @@ pub fn initial_points(
     empty_space: &[DVec3],
     tree: &SphereTree,
     params: &Params,
-) -> TangentPoints {
-    initial_points_counted(
-        spheres,
-        values,
-        set,
-        empty_space,
-        tree,
-        params,
-        &AtomicUsize::new(0),
-    )
-}
-
-/// [`initial_points`], adding 1 to `done` as each sphere of `set` is finished (for progress
-/// reports from another thread; the result does not depend on it).
-pub fn initial_points_counted(
-    spheres: &[Sphere],
-    values: &[f64],
-    set: &[u32],
-    empty_space: &[DVec3],
-    tree: &SphereTree,
-    params: &Params,
-    done: &AtomicUsize,
+    done: Option<&AtomicUsize>,
 ) -> TangentPoints {
     if empty_space.is_empty() || set.is_empty() {
         return TangentPoints::default();
@@ -398,53 +378,44 @@ pub fn initial_points_counted(
             }
         })
         .inspect(|_| {
-            done.fetch_add(1, Ordering::Relaxed);
+            if let Some(done) = done {
+                done.fetch_add(1, Ordering::Relaxed);
+            }
         })
         .collect();
     TangentPoints::from_per_sphere(per, set.iter().copied())
 }
 
+/// Whether every point of a cloud passed the feasibility test against the tree a round tests
+/// against ([`fine_tune`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Tested {
+    /// Not known: every point is tested.
+    No,
+    /// Every point passed against this same tree (the previous round's output, when every round's
+    /// tree holds all spheres): points kept unchanged are not tested again. The result is the
+    /// same either way.
+    AgainstThisTree,
+}
+
 /// One fine-tuning round (the reference's `fine_tune_point_cloud_iter`): every sphere is compared
 /// with `mesh` (the reconstruction of `cloud`), its points are moved, added or dropped by the
 /// cut / miss / tangent rule, and every resulting point is made feasible against `tree` (a batch
-/// of all spheres). Spheres without a point get a second chance from their projection.
+/// of all spheres). Spheres without a point get a second chance from their projection. `tested`
+/// says what `cloud`'s points passed already; with `done`, 1 is added to it as each sphere is
+/// finished (for progress reports from another thread; the result does not depend on it).
+#[allow(clippy::too_many_arguments)]
 pub fn fine_tune(
     spheres: &[Sphere],
     values: &[f64],
     mesh: &TriMesh,
     cloud: &TangentPoints,
+    tested: Tested,
     tree: &SphereTree,
     params: &Params,
+    done: Option<&AtomicUsize>,
 ) -> TangentPoints {
-    fine_tune_counted(
-        spheres,
-        values,
-        mesh,
-        cloud,
-        tree,
-        params,
-        false,
-        &AtomicUsize::new(0),
-    )
-}
-
-/// [`fine_tune`], adding 1 to `done` as each sphere is finished (for progress reports from
-/// another thread; the result does not depend on it).
-///
-/// `cloud_feasible` says that every point of `cloud` already passed the feasibility test against
-/// this same `tree` (the previous round's output, when every round's tree holds all spheres):
-/// points kept unchanged are then not tested again. The result is the same either way.
-#[allow(clippy::too_many_arguments)]
-pub fn fine_tune_counted(
-    spheres: &[Sphere],
-    values: &[f64],
-    mesh: &TriMesh,
-    cloud: &TangentPoints,
-    tree: &SphereTree,
-    params: &Params,
-    cloud_feasible: bool,
-    done: &AtomicUsize,
-) -> TangentPoints {
+    let cloud_feasible = tested == Tested::AgainstThisTree;
     let Ok(index) = MeshIndex::new(mesh) else {
         return cloud.clone();
     };
@@ -555,7 +526,9 @@ pub fn fine_tune_counted(
                 .collect()
         })
         .inspect(|_| {
-            done.fetch_add(1, Ordering::Relaxed);
+            if let Some(done) = done {
+                done.fetch_add(1, Ordering::Relaxed);
+            }
         })
         .collect();
     TangentPoints::from_per_sphere(per, 0..n as u32)

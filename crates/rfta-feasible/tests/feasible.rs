@@ -1,7 +1,7 @@
 //! Tangency points against brute force and analytic shapes.
 
 use rfta_feasible::{
-    Params, TangentPoints, fine_tune, initial_points, local_search, resolve, transport,
+    Params, TangentPoints, Tested, fine_tune, initial_points, local_search, resolve, transport,
 };
 use rfta_geom::rng::Rng;
 use rfta_geom::{Grid, Sphere, glam::DVec3, shapes};
@@ -140,7 +140,7 @@ fn initial_points_of_a_sphere_sdf_are_feasible_and_hug_the_surface() {
             .filter(|&i| values[i as usize] >= 0.0)
             .collect(),
     ] {
-        let pts = initial_points(&spheres, &values, &set, &empty, &tree, &params);
+        let pts = initial_points(&spheres, &values, &set, &empty, &tree, &params, None);
         assert!(
             pts.len() > set.len() * 9 / 10,
             "{} of {}",
@@ -184,7 +184,16 @@ fn fine_tuning_against_the_true_surface_pulls_points_onto_it() {
     // Start from no points at all: every sphere gets its second chance from the mesh.
     let mut cloud = TangentPoints::default();
     for _ in 0..3 {
-        cloud = fine_tune(&spheres, &values, &mesh, &cloud, &tree, &params);
+        cloud = fine_tune(
+            &spheres,
+            &values,
+            &mesh,
+            &cloud,
+            Tested::No,
+            &tree,
+            &params,
+            None,
+        );
         check_points(&cloud, &spheres, &params);
     }
     let d: Vec<f64> = cloud

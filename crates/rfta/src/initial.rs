@@ -86,14 +86,14 @@ fn drawing(
         let tree = SphereTree::with_indices(&unit.spheres, &batch);
         crate::pool::waiters_back();
         parts.push(counted(set.len(), progress, |done| {
-            rfta_feasible::initial_points_counted(
+            rfta_feasible::initial_points(
                 &unit.spheres,
                 values,
                 set,
                 &empty.points,
                 &tree,
                 &fparams,
-                done,
+                Some(done),
             )
         }));
     }

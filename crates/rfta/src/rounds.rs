@@ -93,17 +93,21 @@ impl Rounds {
             let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
             // tested against this same set last round.
-            let cloud_feasible = round > 1 && self.all.is_some();
+            let tested = if round > 1 && self.all.is_some() {
+                rfta_feasible::Tested::AgainstThisTree
+            } else {
+                rfta_feasible::Tested::No
+            };
             let next = counted(n, progress, |done| {
-                rfta_feasible::fine_tune_counted(
+                rfta_feasible::fine_tune(
                     &unit.spheres,
                     &unit.values,
                     &mesh,
                     &self.cloud,
+                    tested,
                     tree,
                     &self.feasible,
-                    cloud_feasible,
-                    done,
+                    Some(done),
                 )
             });
             report
