@@ -113,6 +113,66 @@ pub enum Shell {
     Beyond,
 }
 
+/// What a nearest-first traversal ([`MeshIndex::nearest_first`]) looks for.
+trait Search {
+    /// Whether a node at squared distance `d2` (a lower bound) cannot change the answer.
+    fn skips(&self, d2: f64) -> bool;
+    /// A triangle's point closest to the query, at squared distance `dq` (`c` makes it in full).
+    fn offer(&mut self, dq: f64, c: impl FnOnce() -> ClosestPoint);
+}
+
+/// The closest point within a squared distance (the last of equally near triangles found).
+struct Nearest {
+    best: Option<ClosestPoint>,
+    bound: f64,
+}
+
+impl Search for Nearest {
+    fn skips(&self, d2: f64) -> bool {
+        d2 > self.bound
+    }
+
+    fn offer(&mut self, dq: f64, c: impl FnOnce() -> ClosestPoint) {
+        if dq <= self.bound {
+            self.bound = dq;
+            self.best = Some(c());
+        }
+    }
+}
+
+/// [`MeshIndex::shell`]'s search: the closest point if one is closer than `lo`, else whether one
+/// lies within `hi`.
+struct InShell {
+    lo2: f64,
+    hi2: f64,
+    best: Option<ClosestPoint>,
+    within: bool,
+    /// Boxes at this squared distance or farther cannot change the answer (`lo2` and the nearest
+    /// point found so far stay strict: a point at exactly `lo` is in the shell).
+    bound: f64,
+    strict: bool,
+}
+
+impl Search for InShell {
+    fn skips(&self, d2: f64) -> bool {
+        d2 > self.bound || (self.strict && d2 >= self.bound)
+    }
+
+    fn offer(&mut self, dq: f64, c: impl FnOnce() -> ClosestPoint) {
+        if dq < self.lo2 {
+            if self.best.is_none_or(|b| dq <= b.distance_squared) {
+                self.best = Some(c());
+                self.bound = dq;
+                self.strict = false;
+            }
+        } else if dq <= self.hi2 && self.best.is_none() && !self.within {
+            self.within = true;
+            self.bound = self.lo2;
+            self.strict = true;
+        }
+    }
+}
+
 impl MeshIndex {
     /// Builds the index over `mesh`.
     ///
@@ -214,12 +274,23 @@ impl MeshIndex {
         p: DVec3,
         max_distance_squared: f64,
     ) -> Option<ClosestPoint> {
-        let mut best: Option<ClosestPoint> = None;
-        let mut best_d2 = max_distance_squared;
+        let mut search = Nearest {
+            best: None,
+            bound: max_distance_squared,
+        };
+        self.nearest_first(p, &mut search);
+        search.best
+    }
+
+    /// The one traversal behind [`MeshIndex::closest_point_within`] and [`MeshIndex::shell`]:
+    /// nodes nearest first (the nearer child next), each skipped when `search` says its lower
+    /// bound cannot change the answer, every triangle of a visited leaf offered with its point
+    /// closest to `p`.
+    fn nearest_first(&self, p: DVec3, search: &mut impl Search) {
         let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
         stack.push((0, self.nodes[0].bounds.distance_squared(p)));
         while let Some((idx, d2)) = stack.pop() {
-            if d2 > best_d2 {
+            if search.skips(d2) {
                 continue;
             }
             let node = &self.nodes[idx as usize];
@@ -228,21 +299,17 @@ impl MeshIndex {
                     let [a, b, c] = self.tris[t as usize];
                     let (q, bary) = kernels::closest_point_on_triangle(p, a, b, c);
                     let dq = p.distance_squared(q);
-                    if dq <= best_d2 {
-                        best_d2 = dq;
-                        best = Some(ClosestPoint {
-                            point: q,
-                            distance_squared: dq,
-                            face: self.face_ids[t as usize],
-                            barycentric: bary,
-                        });
-                    }
+                    search.offer(dq, || ClosestPoint {
+                        point: q,
+                        distance_squared: dq,
+                        face: self.face_ids[t as usize],
+                        barycentric: bary,
+                    });
                 }
             } else {
                 self.push_children(node, p, &mut stack);
             }
         }
-        best
     }
 
     /// Pushes an inner node's children with their squared distances to `p`, the farther first so
@@ -273,48 +340,18 @@ impl MeshIndex {
         let lo2 = if lo > 0.0 { lo * lo } else { 0.0 };
         // A negative outer radius holds no point: every box is pruned.
         let hi2 = if hi >= 0.0 { hi * hi } else { -1.0 };
-        let mut best: Option<ClosestPoint> = None;
-        let mut within = false;
-        // Boxes at this squared distance or farther cannot change the answer (`lo2` and the
-        // nearest point found so far stay strict: a point at exactly `lo` is in the shell).
-        let mut bound = hi2;
-        let mut strict = false;
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, self.nodes[0].bounds.distance_squared(p)));
-        while let Some((idx, d2)) = stack.pop() {
-            if d2 > bound || (strict && d2 >= bound) {
-                continue;
-            }
-            let node = &self.nodes[idx as usize];
-            if node.leaf {
-                for t in node.a..node.a + node.b {
-                    let [a, b, c] = self.tris[t as usize];
-                    let (q, bary) = kernels::closest_point_on_triangle(p, a, b, c);
-                    let dq = p.distance_squared(q);
-                    if dq < lo2 {
-                        if best.is_none_or(|b| dq <= b.distance_squared) {
-                            best = Some(ClosestPoint {
-                                point: q,
-                                distance_squared: dq,
-                                face: self.face_ids[t as usize],
-                                barycentric: bary,
-                            });
-                            bound = dq;
-                            strict = false;
-                        }
-                    } else if dq <= hi2 && best.is_none() && !within {
-                        within = true;
-                        bound = lo2;
-                        strict = true;
-                    }
-                }
-            } else {
-                self.push_children(node, p, &mut stack);
-            }
-        }
-        match best {
+        let mut search = InShell {
+            lo2,
+            hi2,
+            best: None,
+            within: false,
+            bound: hi2,
+            strict: false,
+        };
+        self.nearest_first(p, &mut search);
+        match search.best {
             Some(c) => Shell::Closer(c),
-            None if within => Shell::Within,
+            None if search.within => Shell::Within,
             None => Shell::Beyond,
         }
     }
