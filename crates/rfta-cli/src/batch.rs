@@ -637,7 +637,7 @@ fn row_args(
     let preset = preset
         .map(|p| {
             <Preset as clap::ValueEnum>::from_str(&p, true)
-                .map_err(|_| format!("preset: '{p}' is not one of default, paper, fast"))
+                .map_err(|_| format!("preset: '{p}' is not one of {}", rfta::PRESETS.join(", ")))
         })
         .transpose()?;
     Ok(RowArgs {

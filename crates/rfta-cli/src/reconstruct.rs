@@ -164,11 +164,8 @@ impl Tuning {
     }
 
     fn params(&self) -> Params {
-        let mut p = match self.preset {
-            Preset::Default => Params::default(),
-            Preset::Paper => Params::paper_table(),
-            Preset::Fast => Params::fast(),
-        };
+        // Every variant's name is one of rfta::PRESETS (tested below).
+        let mut p = Params::preset(&preset_name(self.preset)).unwrap_or_default();
         if let Some(k) = self.iters {
             p.rounds = k;
         }
@@ -533,4 +530,26 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
         genus.map_or("n/a (several components)".into(), |g| g.to_string())
     ));
     write(&args.output, &out.mesh, ui)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `--preset`'s values are the library's presets, every one of them.
+    #[test]
+    fn the_presets_are_the_librarys() {
+        let ours: Vec<String> = <Preset as clap::ValueEnum>::value_variants()
+            .iter()
+            .map(|&p| preset_name(p))
+            .collect();
+        assert_eq!(ours, rfta::PRESETS);
+        for name in &ours {
+            assert!(Params::preset(name).is_some(), "{name}");
+        }
+        assert_eq!(
+            Params::preset("fast").map(|p| p.rounds),
+            Some(Params::fast().rounds)
+        );
+    }
 }

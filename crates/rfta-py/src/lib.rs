@@ -112,16 +112,12 @@ fn error(e: rfta::Error) -> PyErr {
 
 /// The parameters: a preset, then the overrides in `options` (names of `rfta::Params` fields).
 fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::Params> {
-    let mut p = match preset {
-        "default" => rfta::Params::default(),
-        "paper" => rfta::Params::paper_table(),
-        "fast" => rfta::Params::fast(),
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "preset '{other}' is not one of 'default', 'paper', 'fast'"
-            )));
-        }
-    };
+    let mut p = rfta::Params::preset(preset).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "preset '{preset}' is not one of {}",
+            rfta::PRESETS.map(|n| format!("'{n}'")).join(", ")
+        ))
+    })?;
     let Some(options) = options else {
         return Ok(p);
     };

@@ -160,7 +160,22 @@ pub fn spsr_depth_for(h: f64) -> u32 {
     (cells.log2().ceil() as i64).clamp(5, 12) as u32
 }
 
+/// The names of the presets [`Params::preset`] knows, in one place for every front end.
+pub const PRESETS: [&str; 3] = ["default", "paper", "fast"];
+
 impl Params {
+    /// The preset named `name`: `default` ([`Params::default`], the paper's defaults), `paper`
+    /// ([`Params::paper_table`], its Table 2) or `fast` ([`Params::fast`], gpytoolbox's
+    /// defaults); `None` for another name ([`PRESETS`] lists them).
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "paper" => Some(Self::paper_table()),
+            "fast" => Some(Self::fast()),
+            _ => None,
+        }
+    }
+
     /// The setting of the paper's Table 2 (its evaluation script): 20 rounds, 30 points per sphere.
     pub fn paper_table() -> Self {
         Self {

@@ -796,11 +796,10 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
             rfta_mc::marching_cubes(grid, samples.values(), 0.0)
         }
         "rfta" | "rfta-fast" => {
-            let base = if method == "rfta" {
-                rfta::Params::default()
-            } else {
-                rfta::Params::fast()
-            };
+            // The bench's `rfta` is the default preset (the eval's is the fast one, after the
+            // reference's rows).
+            let preset = if method == "rfta" { "default" } else { "fast" };
+            let base = rfta::Params::preset(preset).unwrap_or_default();
             let params = rfta::Params {
                 threads: Some(threads),
                 ..base

@@ -465,10 +465,10 @@ fn run_method(
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
         "rfta" | "rfta-default" | "rfta-paper" | "rfta-genus" => {
-            // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults.
+            // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults; the
+            // others are `rfta-PRESET`, and `rfta-genus` the default told the genus.
             let base = match method {
                 "rfta" => rfta::Params::fast(),
-                "rfta-default" => rfta::Params::default(),
                 "rfta-genus" => rfta::Params {
                     genus: Some(
                         gt_genus
@@ -477,7 +477,10 @@ fn run_method(
                     ),
                     ..rfta::Params::default()
                 },
-                _ => rfta::Params::paper_table(),
+                _ => method
+                    .strip_prefix("rfta-")
+                    .and_then(rfta::Params::preset)
+                    .ok_or_else(|| format!("unknown method {method}"))?,
             };
             let params = rfta::Params {
                 spsr_depth: tuning.depth.or(base.spsr_depth),
