@@ -246,16 +246,20 @@ pub(crate) fn check_output_2d(path: &std::path::Path) -> anyhow::Result<()> {
 /// A finite number above zero (an option's value; NaN, infinities, zero and negatives refused
 /// where they are parsed rather than taken to mean something).
 pub(crate) fn parse_positive(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("'{s}' is not a finite number above 0")),
-    }
+    parse_finite(s, false)
 }
 
 /// A finite number at or above zero, as [`parse_positive`].
 pub(crate) fn parse_non_negative(s: &str) -> Result<f64, String> {
+    parse_finite(s, true)
+}
+
+fn parse_finite(s: &str, zero: bool) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("'{s}' is not a finite number at or above 0")),
+        Ok(v) if v.is_finite() && (v > 0.0 || (zero && v == 0.0)) => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a finite number {} 0",
+            if zero { "at or above" } else { "above" }
+        )),
     }
 }
