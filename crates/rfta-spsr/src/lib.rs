@@ -239,7 +239,7 @@ pub struct Reconstruction {
 /// solution has no level set.
 pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
     params.validate()?;
-    Ok(run(points, params, &[], None, false)?.0)
+    Ok(run(points, params, &[], None, Keep::Nothing)?.0)
 }
 
 /// A point the surface must leave on one side: inside (`inside: true`) or outside.
@@ -344,7 +344,7 @@ pub fn reconstruct_with_sides(
     params: &SpsrParams,
 ) -> Result<Reconstruction> {
     params.validate()?;
-    Ok(run(points, params, sides, None, false)?.0)
+    Ok(run(points, params, sides, None, Keep::Nothing)?.0)
 }
 
 /// What one reconstruction leaves for the next, for clouds that change little from one solve to
@@ -406,7 +406,7 @@ impl Workspace {
         params: &SpsrParams,
     ) -> Result<Reconstruction> {
         params.validate()?;
-        let (out, warm) = run(points, params, &[], self.last.as_ref(), true)?;
+        let (out, warm) = run(points, params, &[], self.last.as_ref(), Keep::Coefficients)?;
         self.last = warm;
         Ok(out)
     }
@@ -417,12 +417,37 @@ impl Workspace {
     }
 }
 
+/// What a solve keeps for the next one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    /// Nothing: a cold solve.
+    Nothing,
+    /// Its coefficients and the octree's node index ([`Workspace`]).
+    Coefficients,
+}
+
+/// The solve's result before extraction: the solution and its iso-value, the first pass's (while
+/// side re-solves ran) with the octree it was solved on when the octree was refined since, the
+/// side points on the wrong side after each pass, and the time spent so far.
+struct Solved {
+    sol: solve::Solution,
+    iso: f64,
+    first: Option<(solve::Solution, f64)>,
+    first_levels: Option<Vec<tree::Level>>,
+    side_errors: Vec<usize>,
+    tree_time: Duration,
+    system_time: Duration,
+    solve_time: Duration,
+}
+
+/// The three phases: the octree over the merged samples, the solve (re-solved while side points
+/// are on the wrong side), the extraction ([`extract_surface`]).
 fn run(
     points: &OrientedPoints,
     params: &SpsrParams,
     sides: &[SidePoint],
     warm: Option<&solve::WarmStart>,
-    keep: bool,
+    keep: Keep,
 ) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
     if points.len() < 3 {
         return Err(Error::TooFewPoints {
@@ -628,12 +653,46 @@ fn run(
     };
 
     drop((v, down));
+    let solved = Solved {
+        sol,
+        iso,
+        first,
+        first_levels,
+        side_errors,
+        tree_time,
+        system_time,
+        solve_time,
+    };
+    extract_surface(points, &frame, &samples, levels, solved, keep)
+}
+
+/// The surface of `solved` on `levels` (the first pass's, when a re-solve pulled it out of the
+/// cube and the first pass's stayed inside), in world coordinates, with the report; and what
+/// `keep` asks for the next solve.
+fn extract_surface(
+    points: &OrientedPoints,
+    frame: &tree::Frame,
+    samples: &[tree::Sample],
+    mut levels: Vec<tree::Level>,
+    solved: Solved,
+    keep: Keep,
+) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
+    let Solved {
+        sol,
+        iso,
+        first,
+        first_levels,
+        mut side_errors,
+        tree_time,
+        system_time,
+        solve_time,
+    } = solved;
     let t3 = Instant::now();
     let solve::Solution { x, u } = sol;
     let mut values = extract::final_values(&levels, &u);
     drop(u);
     // Only the coefficients outlive the extraction, and only when the next solve will use them.
-    let kept_x = keep.then_some(x);
+    let kept_x = (keep == Keep::Coefficients).then_some(x);
     let mut iso = iso;
     // A re-solve that pulls the surface out of the cube (where it would come out open) while the
     // first solve's stayed inside is dropped for the first solve's surface.
@@ -658,7 +717,7 @@ fn run(
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });
     }
-    extract::to_world(&frame, &mut ex.vertices);
+    extract::to_world(frame, &mut ex.vertices);
     let next = kept_x.map(|x| solve::WarmStart {
         nodes: levels
             .iter_mut()
