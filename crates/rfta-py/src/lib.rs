@@ -399,7 +399,7 @@ fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<B
     d.set_item("warnings", r.warnings.clone())?;
     let timings = PyDict::new(py);
     for (stage, t) in &r.timings {
-        timings.set_item(stage, t.as_secs_f64())?;
+        timings.set_item(stage.to_string(), t.as_secs_f64())?;
     }
     d.set_item("timings", timings)?;
     Ok(d)

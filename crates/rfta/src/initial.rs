@@ -99,10 +99,10 @@ fn drawing(
     }
     let cloud = merge_by_owner(parts);
     report.feasible_initial = cloud.len();
-    report.timings.push(("rasterize".into(), raster_time));
+    report.timings.push((crate::Step::Rasterize, raster_time));
     report
         .timings
-        .push(("initial points".into(), t.elapsed() - raster_time));
+        .push((crate::Step::InitialPoints, t.elapsed() - raster_time));
     if cloud.len() < 3 && (neg.is_empty() || pos.is_empty()) {
         return Err(Error::NoSurface {
             samples: n,

@@ -68,7 +68,7 @@ pub use params::{
     CELLS_PER_SPACING, MAX_THREADS, OWNER_BAND, PRESETS, Params, RASTER_REACH, ROUND_SWEEPS,
     SPSR_FULL_DEPTH, Seeds, spsr_depth_for,
 };
-pub use report::{MeshCheck, Reconstruction, Report, Stage};
+pub use report::{MeshCheck, Reconstruction, Report, Stage, Step};
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -226,7 +226,7 @@ fn run(
     if params.check {
         let t = std::time::Instant::now();
         check::samples(samples, params, &mut report)?;
-        report.timings.push(("input check".into(), t.elapsed()));
+        report.timings.push((Step::InputCheck, t.elapsed()));
     }
     go_on()?;
     let unit = normalize::UnitBox::new(samples, report.clamp, report.radius_scale);

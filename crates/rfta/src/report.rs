@@ -32,6 +32,50 @@ pub enum Stage {
     },
 }
 
+/// A timed step of a reconstruction ([`Report::timings`]); its `Display` is the step's name as
+/// the CLI prints it and the Python report keys it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Step {
+    /// The input check ([`crate::check`]).
+    InputCheck,
+    /// Empty-space rasterization of both sign sets.
+    Rasterize,
+    /// The initial tangency points.
+    InitialPoints,
+    /// Fine-tuning round `n` (1-based): its screened Poisson solve.
+    RoundSolve(usize),
+    /// Fine-tuning round `n`: moving the points against that surface.
+    RoundTune(usize),
+    /// The final screened Poisson solve.
+    FinalSolve,
+    /// Components judged and removed.
+    Components,
+    /// Dents, and sample spheres cleared.
+    SpheresCleared,
+    /// A known genus reached.
+    Topology,
+    /// The mesh check and the consistency check.
+    Consistency,
+}
+
+impl std::fmt::Display for Step {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Step::InputCheck => write!(f, "input check"),
+            Step::Rasterize => write!(f, "rasterize"),
+            Step::InitialPoints => write!(f, "initial points"),
+            Step::RoundSolve(n) => write!(f, "round {n}: screened Poisson"),
+            Step::RoundTune(n) => write!(f, "round {n}: fine-tuning"),
+            Step::FinalSolve => write!(f, "final screened Poisson"),
+            Step::Components => write!(f, "components judged"),
+            Step::SpheresCleared => write!(f, "spheres cleared"),
+            Step::Topology => write!(f, "topology"),
+            Step::Consistency => write!(f, "consistency check"),
+        }
+    }
+}
+
 /// Runs `work` with a counter of finished spheres, reporting it through `progress` from a
 /// monitor thread every half second until `work` returns (the result does not depend on it).
 pub(crate) fn counted<T>(
@@ -137,8 +181,8 @@ pub struct Report {
     /// Things the caller should know: inconsistent samples, a detected clamp, more than 5% of the
     /// spheres without a point, a mesh that is not watertight.
     pub warnings: Vec<String>,
-    /// Wall time of each stage, in order.
-    pub timings: Vec<(String, Duration)>,
+    /// Wall time of each step, in order.
+    pub timings: Vec<(Step, Duration)>,
 }
 
 /// Checks of the output mesh.
@@ -173,6 +217,27 @@ pub struct Reconstruction {
 mod tests {
     use super::*;
     use std::time::Instant;
+
+    /// The steps' names are the ones `rfta -v` printed and the Python report keyed before they
+    /// were an enum, one per step.
+    #[test]
+    fn steps_keep_their_names() {
+        let steps = [
+            (Step::InputCheck, "input check"),
+            (Step::Rasterize, "rasterize"),
+            (Step::InitialPoints, "initial points"),
+            (Step::RoundSolve(3), "round 3: screened Poisson"),
+            (Step::RoundTune(10), "round 10: fine-tuning"),
+            (Step::FinalSolve, "final screened Poisson"),
+            (Step::Components, "components judged"),
+            (Step::SpheresCleared, "spheres cleared"),
+            (Step::Topology, "topology"),
+            (Step::Consistency, "consistency check"),
+        ];
+        for (step, name) in steps {
+            assert_eq!(step.to_string(), name);
+        }
+    }
 
     #[test]
     fn long_stages_report_progress_and_short_ones_stay_quiet() {

@@ -88,7 +88,7 @@ impl Rounds {
             };
             report
                 .timings
-                .push((format!("round {round}: screened Poisson"), t.elapsed()));
+                .push((crate::Step::RoundSolve(round), t.elapsed()));
             crate::pool::waiters_back();
             let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
@@ -112,7 +112,7 @@ impl Rounds {
             });
             report
                 .timings
-                .push((format!("round {round}: fine-tuning"), t.elapsed()));
+                .push((crate::Step::RoundTune(round), t.elapsed()));
             if next.len() < 3 {
                 report.stopped_early = Some(format!(
                     "round {round}: only {} feasible points remained",

@@ -20,7 +20,7 @@ use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
 use crate::rounds::Rounds;
-use crate::{Params, Reconstruction, Report, Result, Stage, check, consistency};
+use crate::{Params, Reconstruction, Report, Result, Stage, Step, check, consistency};
 
 use islands::{inverted_and_unenclosed, judge};
 use rfta_repair::{
@@ -81,9 +81,7 @@ fn final_solve(
     let solved = crate::rounds::solve(&cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
     report.side_errors = solved.report.side_errors;
     let mut mesh = solved.mesh;
-    report
-        .timings
-        .push(("final screened Poisson".into(), t.elapsed()));
+    report.timings.push((Step::FinalSolve, t.elapsed()));
     let n = unit.len();
     let mut owners = cloud.owners.clone();
     owners.dedup();
@@ -135,9 +133,7 @@ fn repair(
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
-    report
-        .timings
-        .push(("components judged".into(), t.elapsed()));
+    report.timings.push((Step::Components, t.elapsed()));
     crate::pool::waiters_back();
     let t = Instant::now();
     // First radially out of the spheres that own points (near the surface and small, so the
@@ -168,7 +164,7 @@ fn repair(
         .count()
         + report.vertices_added;
     report.dents += dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
-    report.timings.push(("spheres cleared".into(), t.elapsed()));
+    report.timings.push((Step::SpheresCleared, t.elapsed()));
     if let Some(genus) = params.genus {
         let t = Instant::now();
         (report.components_joined, report.handles_cut) = to_genus(
@@ -178,7 +174,7 @@ fn repair(
             consistency::THIN_LOOP,
             consistency::THIN_LOOP_MAX_GENUS,
         );
-        report.timings.push(("topology".into(), t.elapsed()));
+        report.timings.push((Step::Topology, t.elapsed()));
     }
     report.cavities = face_components(&mesh)
         .iter()
@@ -202,9 +198,7 @@ fn verdict(
     let topology = rfta_mesh::Topology::of(mesh);
     report.mesh = check::mesh(mesh, &topology)?;
     report.consistency = consistency::measure_with(samples, mesh, &topology, report.clamp)?;
-    report
-        .timings
-        .push(("consistency check".into(), t.elapsed()));
+    report.timings.push((Step::Consistency, t.elapsed()));
     if let Some(genus) = params.genus {
         match topology.genus() {
             Some(g) if g < genus as i64 => report.warnings.push(format!(
