@@ -173,7 +173,11 @@ def reconstruct(
         Scattered sample positions (``S`` then has shape (n,)).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
     raster_resolution, min_island, genus, threads
-        As ``rfta reconstruct``'s options of the same names (``rfta reconstruct --help``).
+        The fields of ``rfta::Params`` of these names. ``rfta reconstruct``'s options (``rfta
+        reconstruct --help``) are the same with dashes (``--owner-band``, ``--min-island``),
+        except ``rounds`` (``--iters``), ``max_points_per_sphere`` (``--max-points``),
+        ``raster_resolution`` (``--raster-res``) and ``screening`` (no option: the CLI keeps the
+        preset's).
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
     progress : callable(stage, done, of), optional
