@@ -199,7 +199,13 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     if meta.is_file() && meta.len() > limit {
         return Err(too_large(format!("the file is {} bytes", meta.len())));
     }
-    let mut bytes = Vec::new();
+    // A regular file's size is known: one allocation of it (growing by doubling would copy a
+    // large grid several times and hold up to twice it at once).
+    let mut bytes = Vec::with_capacity(if meta.is_file() {
+        usize::try_from(meta.len()).unwrap_or(0)
+    } else {
+        0
+    });
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
         .map_err(io)?;
