@@ -20,19 +20,9 @@ impl Grid {
     pub fn nearest_marked(&self, marked: &[bool]) -> Vec<u32> {
         assert_eq!(marked.len(), self.len(), "one mark per grid point");
         let dims = self.dims();
-        // The nearest point does not change with the unit of length. Where a squared spacing
-        // would overflow (spacings of 1e155) or lose precision (1e-200), distances are measured
-        // in the largest spacing instead; other grids keep their own unit (and their ties).
-        let (lo, hi) = (self.spacing().min_element(), self.spacing().max_element());
-        let unit = if (lo * lo).is_normal()
-            && (hi * hi * (dims.iter().max().copied().unwrap_or(1) as f64).powi(2) * 3.0)
-                .is_finite()
-        {
-            1.0
-        } else {
-            hi
-        };
-        let spacing = (self.spacing() / unit).to_array();
+        // The nearest point does not change with the unit of length: measured in the largest
+        // spacing, no squared distance overflows (spacings of 1e155) or underflows (1e-200).
+        let spacing = (self.spacing() / self.spacing().max_element()).to_array();
         let mut dist: Vec<f64> = marked
             .iter()
             .map(|&m| if m { 0.0 } else { f64::INFINITY })
