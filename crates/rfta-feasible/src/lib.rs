@@ -274,9 +274,28 @@ pub fn local_search(
     None
 }
 
+/// Where [`transport`] put a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transported {
+    /// A step that passed the feasibility test against the tree.
+    Feasible(DVec3),
+    /// Not known to be feasible: the target after every halving failed, or the start untouched
+    /// (for the feasibility pass to handle, the reference's behaviour).
+    Unchecked(DVec3),
+}
+
+impl Transported {
+    /// The point, whichever it is.
+    pub fn point(self) -> DVec3 {
+        match self {
+            Self::Feasible(x) | Self::Unchecked(x) => x,
+        }
+    }
+}
+
 /// Geodesic transport of `a` toward `q` on sphere `i` by arc length `tau`, halved until the
-/// result lies inside no other sphere of `tree` (at most `halvings` times); `q` if none works,
-/// for the feasibility pass to handle (the reference's behaviour).
+/// result lies inside no other sphere of `tree` (at most `halvings` times); `q` if none works.
+/// `near` is scratch (a caller transporting many points passes the same one).
 pub fn transport(
     spheres: &[Sphere],
     tree: &SphereTree,
@@ -284,26 +303,12 @@ pub fn transport(
     a: DVec3,
     q: DVec3,
     params: &Params,
-) -> DVec3 {
-    transport_checked(spheres, tree, i, a, q, params, &mut Vec::new()).0
-}
-
-/// [`transport`], also saying whether the result is known to be feasible against `tree` (a
-/// step that passed the test; `false` when `q` is returned after every halving failed, or `a`
-/// untouched). `near` is scratch.
-fn transport_checked(
-    spheres: &[Sphere],
-    tree: &SphereTree,
-    i: u32,
-    a: DVec3,
-    q: DVec3,
-    params: &Params,
     near: &mut Vec<u32>,
-) -> (DVec3, bool) {
+) -> Transported {
     let s = params.owner(spheres[i as usize]);
     let tol = params.tol;
     if (a - q).length() < tol || s.radius < tol || (a - s.center).length() < tol {
-        return (a, false);
+        return Transported::Unchecked(a);
     }
     let chord = ((a - q).length() / (2.0 * s.radius)).min(1.0);
     let mut arc = (params.tau / s.radius).min(2.0 * chord.asin()) * s.radius;
@@ -320,11 +325,11 @@ fn transport_checked(
             .iter()
             .any(|&j| spheres[j as usize].signed_distance(y) < -tol)
         {
-            return (y, true);
+            return Transported::Feasible(y);
         }
         arc *= 0.5;
     }
-    (q, false)
+    Transported::Unchecked(q)
 }
 
 /// Initial tangency points of one sign set (`set`: indices into `spheres` / `values`): for each
@@ -420,7 +425,6 @@ pub fn fine_tune(
         return cloud.clone();
     };
     let n = spheres.len();
-    let tol = params.tol;
     // Points owned by each sphere (the cloud is sorted by owner).
     let mut start = vec![0usize; n + 1];
     for &o in &cloud.owners {
@@ -429,102 +433,20 @@ pub fn fine_tune(
     for i in 0..n {
         start[i + 1] += start[i];
     }
+    let round = Round {
+        spheres,
+        values,
+        index: &index,
+        cloud,
+        start: &start,
+        tree,
+        params,
+        cloud_feasible,
+    };
     let per: Vec<Vec<(DVec3, DVec3)>> = (0..n as u32)
         .into_par_iter()
         .with_max_len(SPHERES_PER_TASK)
-        .map(|i| {
-            let s = params.owner(spheres[i as usize]);
-            let v = values[i as usize];
-            let r = s.radius;
-            if spheres[i as usize].radius >= params.owner_radius || r <= 0.0 {
-                return Vec::new();
-            }
-            let cp = index.closest_point(s.center);
-            let di = cp.distance_squared.sqrt();
-            let owned = start[i as usize]..start[i as usize + 1];
-            let k = owned.len();
-            let cut = di < r - tol && r > tol;
-            let miss = di > r + tol && r > tol;
-            let search = |x: DVec3| local_search(spheres, tree, i, x, params);
-            let oriented = |x: DVec3| (x, normal_at(s.center, v, x));
-            if k > 0 && !cut && !miss {
-                // Touched within the tolerance: the points stay. A point that passed the test against
-                // this tree would pass the local search's first test and come back unchanged.
-                return owned
-                    .filter_map(|a| {
-                        let x = cloud.points[a];
-                        if cloud_feasible { Some(x) } else { search(x) }
-                    })
-                    .map(oriented)
-                    .collect();
-            }
-            let inside_mesh = index.winding_number(s.center) > 0.5;
-            let sigma = if v < 0.0 { -1.0 } else { 1.0 } * if inside_mesh { -1.0 } else { 1.0 };
-            let proj = |x: DVec3| {
-                let d = x - s.center;
-                let len = d.length();
-                let dir = if len > f64::EPSILON {
-                    d / len
-                } else {
-                    DVec3::X
-                };
-                s.center + r * sigma * dir
-            };
-            let qi = proj(cp.point);
-            // Each emitted point, and whether it is already known to be feasible.
-            let mut emitted: Vec<(DVec3, bool)> = Vec::new();
-            let mut near = Vec::new();
-            if k == 0 {
-                emitted.push((qi, false));
-            } else {
-                let closest = owned
-                    .clone()
-                    .min_by(|&a, &b| {
-                        (cloud.points[a] - qi)
-                            .length_squared()
-                            .total_cmp(&(cloud.points[b] - qi).length_squared())
-                            .then(a.cmp(&b))
-                    })
-                    .unwrap_or(owned.start);
-                emitted.push(transport_checked(
-                    spheres,
-                    tree,
-                    i,
-                    cloud.points[closest],
-                    qi,
-                    params,
-                    &mut near,
-                ));
-                if cut && params.n_max > 1 {
-                    // Each point's own closest point on the mesh, nearest first.
-                    let mut by_distance: Vec<(usize, DVec3, f64)> = owned
-                        .map(|a| {
-                            let c = index.closest_point(cloud.points[a]);
-                            (a, c.point, c.distance_squared.sqrt())
-                        })
-                        .collect();
-                    by_distance.sort_by(|x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)));
-                    let severe = di <= params.severe * r;
-                    let limit = if severe { k } else { k - 1 };
-                    for &(a, c, _) in by_distance.iter().take(limit.min(params.n_max - 1)) {
-                        emitted.push(transport_checked(
-                            spheres,
-                            tree,
-                            i,
-                            cloud.points[a],
-                            proj(c),
-                            params,
-                            &mut near,
-                        ));
-                    }
-                }
-            }
-            emitted
-                .into_iter()
-                .filter_map(|(x, feasible)| if feasible { Some(x) } else { search(x) })
-                .map(oriented)
-                .collect()
-        })
+        .map(|i| round.sphere(i))
         .inspect(|_| {
             if let Some(done) = done {
                 done.fetch_add(1, Ordering::Relaxed);
@@ -532,4 +454,129 @@ pub fn fine_tune(
         })
         .collect();
     TangentPoints::from_per_sphere(per, 0..n as u32)
+}
+
+/// What one fine-tuning round reads, shared by every sphere's rule.
+#[derive(Clone, Copy)]
+struct Round<'a> {
+    spheres: &'a [Sphere],
+    values: &'a [f64],
+    index: &'a MeshIndex,
+    cloud: &'a TangentPoints,
+    /// The cloud's points of sphere `i` are `start[i]..start[i + 1]`.
+    start: &'a [usize],
+    tree: &'a SphereTree,
+    params: &'a Params,
+    cloud_feasible: bool,
+}
+
+impl Round<'_> {
+    /// Sphere `i`'s points after the round, with their normals: the cut / miss / tangent rule.
+    fn sphere(&self, i: u32) -> Vec<(DVec3, DVec3)> {
+        let Round {
+            spheres,
+            values,
+            index,
+            cloud,
+            start,
+            tree,
+            params,
+            cloud_feasible,
+        } = *self;
+        let tol = params.tol;
+        let s = params.owner(spheres[i as usize]);
+        let v = values[i as usize];
+        let r = s.radius;
+        if spheres[i as usize].radius >= params.owner_radius || r <= 0.0 {
+            return Vec::new();
+        }
+        let cp = index.closest_point(s.center);
+        let di = cp.distance_squared.sqrt();
+        let owned = start[i as usize]..start[i as usize + 1];
+        let k = owned.len();
+        let cut = di < r - tol && r > tol;
+        let miss = di > r + tol && r > tol;
+        let search = |x: DVec3| local_search(spheres, tree, i, x, params);
+        let oriented = |x: DVec3| (x, normal_at(s.center, v, x));
+        if k > 0 && !cut && !miss {
+            // Touched within the tolerance: the points stay. A point that passed the test against
+            // this tree would pass the local search's first test and come back unchanged.
+            return owned
+                .filter_map(|a| {
+                    let x = cloud.points[a];
+                    if cloud_feasible { Some(x) } else { search(x) }
+                })
+                .map(oriented)
+                .collect();
+        }
+        let inside_mesh = index.winding_number(s.center) > 0.5;
+        let sigma = if v < 0.0 { -1.0 } else { 1.0 } * if inside_mesh { -1.0 } else { 1.0 };
+        let proj = |x: DVec3| {
+            let d = x - s.center;
+            let len = d.length();
+            let dir = if len > f64::EPSILON {
+                d / len
+            } else {
+                DVec3::X
+            };
+            s.center + r * sigma * dir
+        };
+        let qi = proj(cp.point);
+        // Each emitted point, and whether it is already known to be feasible.
+        let mut emitted: Vec<Transported> = Vec::new();
+        let mut near = Vec::new();
+        if k == 0 {
+            emitted.push(Transported::Unchecked(qi));
+        } else {
+            let closest = owned
+                .clone()
+                .min_by(|&a, &b| {
+                    (cloud.points[a] - qi)
+                        .length_squared()
+                        .total_cmp(&(cloud.points[b] - qi).length_squared())
+                        .then(a.cmp(&b))
+                })
+                .unwrap_or(owned.start);
+            emitted.push(transport(
+                spheres,
+                tree,
+                i,
+                cloud.points[closest],
+                qi,
+                params,
+                &mut near,
+            ));
+            if cut && params.n_max > 1 {
+                // Each point's own closest point on the mesh, nearest first.
+                let mut by_distance: Vec<(usize, DVec3, f64)> = owned
+                    .map(|a| {
+                        let c = index.closest_point(cloud.points[a]);
+                        (a, c.point, c.distance_squared.sqrt())
+                    })
+                    .collect();
+                by_distance.sort_by(|x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)));
+                let severe = di <= params.severe * r;
+                let limit = if severe { k } else { k - 1 };
+                for &(a, c, _) in by_distance.iter().take(limit.min(params.n_max - 1)) {
+                    emitted.push(transport(
+                        spheres,
+                        tree,
+                        i,
+                        cloud.points[a],
+                        proj(c),
+                        params,
+                        &mut near,
+                    ));
+                }
+            }
+        }
+        emitted
+            .into_iter()
+            .filter_map(|t| match t {
+                Transported::Feasible(x) => Some(x),
+                Transported::Unchecked(x) => search(x),
+            })
+            .map(oriented)
+            .collect()
+    }
 }

@@ -73,7 +73,7 @@ fn transport_stays_on_the_sphere_moves_at_most_tau_and_survives_antipodes() {
     let params = Params::default();
     let a = DVec3::new(0.8, 0.5, 0.5);
     for q in [DVec3::new(0.5, 0.8, 0.5), DVec3::new(0.2, 0.5, 0.5)] {
-        let y = transport(&spheres, &tree, 0, a, q, &params);
+        let y = transport(&spheres, &tree, 0, a, q, &params, &mut Vec::new()).point();
         assert!(y.is_finite());
         assert!(((y - spheres[0].center).length() - 0.3).abs() < 1e-12);
         let angle = (a - spheres[0].center).angle_between(y - spheres[0].center);
@@ -263,7 +263,7 @@ fn transport_equals_the_halving_rule_checked_by_brute_force() {
             ..Params::default()
         };
         let expect = transport_by_halving(&spheres, i, a, q, &params);
-        let got = transport(&spheres, &tree, i as u32, a, q, &params);
+        let got = transport(&spheres, &tree, i as u32, a, q, &params, &mut Vec::new()).point();
         assert_eq!(got, expect, "case {case}");
         let full = rfta_geom::kernels::transport_on_sphere(&s, a, q, params.tau);
         halved += usize::from(got != full && got != q);

@@ -360,6 +360,20 @@ impl SdfSamples {
         }
     }
 
+    /// The sample spacing `h` every margin and resolution in rfta is stated in: the grid spacing
+    /// (its largest axis), or for scattered samples the side of a cube holding one sample on
+    /// average over their bounding box (the spacing of a grid with as many samples in that box).
+    pub fn spacing(&self) -> f64 {
+        match &self.layout {
+            Layout::Grid(g) => g.spacing().max_element(),
+            Layout::Scattered(_) => {
+                let b = self.bounds();
+                let e = (b.max - b.min).max(DVec3::splat(1e-300));
+                (e.x * e.y * e.z / self.len().max(1) as f64).cbrt()
+            }
+        }
+    }
+
     /// Counts of negative, zero and positive values.
     pub fn sign_balance(&self) -> SignBalance {
         SignBalance::of(&self.values)
@@ -427,6 +441,18 @@ fn validate_values(values: &[f64]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A grid's spacing is its largest axis; scattered samples' that of a grid with as many
+    /// samples in their box (three samples spanning a 2 x 3 x 4 box: the cube root of 24 / 3).
+    #[test]
+    fn the_spacing_of_grids_and_scattered_samples() {
+        let g = Grid::new([3, 4, 5], DVec3::ZERO, DVec3::new(0.1, 0.3, 0.2)).expect("grid");
+        let grid = SdfSamples::grid(g, vec![1.0; 60]).expect("samples");
+        assert_eq!(grid.spacing(), 0.3);
+        let positions = vec![DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::new(1.0, 3.0, 4.0)];
+        let scattered = SdfSamples::scattered(positions, vec![1.0, -1.0, 1.0]).expect("samples");
+        assert!((scattered.spacing() - 2.0).abs() < 1e-15);
+    }
 
     /// A grid's points, shuffled and in another axis order, are recognised as that grid, each
     /// with its own index; a point off the grid, a missing point or a repeated one is not a grid.

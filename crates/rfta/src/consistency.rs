@@ -3,8 +3,8 @@
 //! Reach for the Arcs (Sellán, Ren, Batty, Stein 2024, §3) asks for a surface that touches every
 //! sample sphere `B(p_i, |s_i|)` and enters none, with `p_i` outside where `s_i > 0` and inside
 //! where `s_i < 0`. [`measure`] checks each sample against a mesh, with tolerances in units of the
-//! sample spacing `h` (the grid spacing; for scattered samples the mean distance from a sample to
-//! its nearest other sample):
+//! sample spacing `h` ([`SdfSamples::spacing`]: the grid spacing; for scattered samples that of a
+//! grid with as many samples in their box):
 //!
 //! - a **sign error**: `|s_i| > 0.01 h` and the generalized winding number of the mesh puts `p_i`
 //!   on the other side;
@@ -23,7 +23,6 @@
 //! pipeline's output ([`crate::Report::consistency`]) and any other method's mesh (`cargo xtask
 //! eval`), so the numbers compare.
 
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Grid, SdfSamples, TriMesh};
@@ -77,39 +76,6 @@ impl Consistency {
     }
 }
 
-/// The sample spacing the margins use: the grid spacing (largest axis), or for scattered samples
-/// the mean distance from a sample to its nearest other sample.
-pub fn spacing(samples: &SdfSamples) -> f64 {
-    if samples.as_grid().is_some() {
-        return crate::normalize::sample_spacing(samples);
-    }
-    let positions = samples.positions();
-    if positions.len() < 2 {
-        return 0.0;
-    }
-    let coords: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
-    let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
-        return 0.0;
-    };
-    let two = std::num::NonZeroUsize::MIN.saturating_add(1);
-    // The two nearest are the sample itself and its nearest other sample.
-    let nearest: Vec<f64> = coords
-        .par_iter()
-        .map(|q| {
-            tree.query(q)
-                .nearest_n::<SquaredEuclidean<f64>>(two)
-                .execute()
-                .iter()
-                .map(|n| n.distance)
-                .fold(0.0, f64::max)
-                .sqrt()
-        })
-        .collect();
-    // Summed in order: the same bits at any thread count.
-    let total: f64 = nearest.iter().sum();
-    total / positions.len() as f64
-}
-
 /// Checks `mesh` against every sample (see the module documentation); `clamp` is the magnitude at
 /// and beyond which values are clamped (`None`: none are). The result does not depend on the
 /// thread count.
@@ -128,7 +94,7 @@ pub(crate) fn measure_with(
     topology: &Topology,
     clamp: Option<f64>,
 ) -> Result<Consistency> {
-    let h = spacing(samples);
+    let h = samples.spacing();
     let clamp = clamp.unwrap_or(f64::INFINITY);
     let positions = samples.positions();
     let values = samples.values();
@@ -524,7 +490,7 @@ mod tests {
                 mesh: &mesh,
                 index: &index,
                 normals: Some(&normals),
-                h: spacing(&samples),
+                h: samples.spacing(),
                 clamp: f64::INFINITY,
             };
             let grid = samples.as_grid().expect("grid");
@@ -619,19 +585,5 @@ mod tests {
             );
             assert!(checked > 3900, "{checked}");
         }
-    }
-
-    #[test]
-    fn scattered_samples_use_the_mean_nearest_neighbour_distance() {
-        // Two pairs 0.1 apart, the pairs 5 apart: every sample's nearest other sample is 0.1 away.
-        let positions = vec![
-            DVec3::ZERO,
-            DVec3::new(0.1, 0.0, 0.0),
-            DVec3::new(5.0, 0.0, 0.0),
-            DVec3::new(5.0, 0.1, 0.0),
-        ];
-        let samples =
-            SdfSamples::scattered(positions, vec![1.0, -1.0, 1.0, -1.0]).expect("samples");
-        assert!((spacing(&samples) - 0.1).abs() < 1e-12);
     }
 }

@@ -64,7 +64,7 @@ impl UnitBox {
             values,
             spheres,
             clamp: cap,
-            input_spacing: sample_spacing(samples),
+            input_spacing: samples.spacing(),
             grid: samples.as_grid().and_then(|g| {
                 Grid::new(g.dims(), (g.origin() - trans) / scale, g.spacing() / scale).ok()
             }),
@@ -197,19 +197,6 @@ impl UnitBox {
     /// The sample spacing in the unit box.
     pub(crate) fn spacing(&self) -> f64 {
         self.input_spacing / self.scale
-    }
-}
-
-/// The grid spacing (largest axis), or for scattered samples the side of a cube holding one
-/// sample on average over their bounding box.
-pub(crate) fn sample_spacing(samples: &SdfSamples) -> f64 {
-    match samples.as_grid() {
-        Some(g) => g.spacing().max_element(),
-        None => {
-            let b = samples.bounds();
-            let e = (b.max - b.min).max(DVec3::splat(1e-300));
-            (e.x * e.y * e.z / samples.len().max(1) as f64).cbrt()
-        }
     }
 }
 

@@ -146,7 +146,7 @@ fn repair(
     let near = SphereTree::with_indices(&unit.spheres, &near);
     // Dents before clearing the spheres (which can then clear what a dent's faces enter) and
     // after it (for the samples a move out of a sphere left on the wrong side).
-    let h = consistency::spacing(samples);
+    let h = samples.spacing();
     report.dents = dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
     let before = mesh.vertices.clone();
     let spheres = unit.sphere_set();
