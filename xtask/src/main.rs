@@ -16,6 +16,7 @@
 
 mod bench;
 mod eval;
+mod method;
 mod shaders;
 mod tidy;
 

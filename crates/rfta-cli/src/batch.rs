@@ -135,7 +135,8 @@ impl Status {
     }
 }
 
-/// The report figures a status row carries (from `reconstruct --report`).
+/// The report figures a status row carries (from `reconstruct --report`: [`rfta::Report`]'s
+/// serde names, and the mesh's `vertices` and `faces`).
 const FIGURES: [&str; 8] = [
     "samples",
     "vertices",
@@ -893,11 +894,35 @@ mod tests {
         assert_eq!(flags, all);
         // And the values are the ones given.
         for pair in [
-            ["--iters", "4"],
+            ["--rounds", "4"],
             ["--preset", "paper"],
             ["--max-memory", "2147483648B"],
         ] {
             assert!(given.windows(2).any(|w| w == pair), "{pair:?} in {given:?}");
+        }
+        // Read back, they make the same parameters.
+        let again = Cli::try_parse_from(
+            ["rfta".to_string(), "m.csv".into()]
+                .into_iter()
+                .chain(given),
+        )
+        .expect("options");
+        let params = |c: &Cli| c.args.tuning.params().expect("valid");
+        assert_eq!(params(&again), params(&cli));
+        assert_eq!(params(&cli).rounds, 4);
+        assert_eq!(params(&cli).spsr_depth, Some(7));
+    }
+
+    /// The status columns are figures of the report `reconstruct --report` writes (its
+    /// [`rfta::Report`] and the mesh's size), by the same names.
+    #[test]
+    fn the_status_figures_are_report_figures() {
+        let report = serde_json::to_value(rfta::Report::default()).expect("serializes");
+        for f in FIGURES {
+            assert!(
+                report.get(f).is_some() || ["vertices", "faces"].contains(&f),
+                "{f} is no figure of the report"
+            );
         }
     }
 

@@ -96,7 +96,7 @@ pub(crate) fn reconstruct(
         "reconstructed in {:.2} s: {} tangency points on {} circles, {} rounds, quadtree depth {}; {}",
         t.elapsed().as_secs_f64(),
         r.points,
-        r.owners,
+        r.circles_with_points,
         r.rounds,
         r.depth,
         summary(&out.curve)
@@ -104,20 +104,13 @@ pub(crate) fn reconstruct(
     rfta_io::write_polylines(output, &out.curve)?;
     ui.say(format!("wrote {}", output.display()));
     if let Some(path) = extras.report {
-        let json = serde_json::json!({
-            "seconds": r.seconds,
-            "samples": r.samples,
-            "dimension": 2,
-            "vertices": out.curve.vertices.len(),
-            "faces": out.curve.edges.len(),
-            "components": out.curve.loops(),
-            "watertight": out.curve.is_closed(),
-            "circles_with_points": r.owners,
-            "points": r.points,
-            "rounds": r.rounds,
-            "depth": r.depth,
-            "islands_removed": r.islands_removed,
-        });
+        // The report's own figures, and the curve's under the names the 3D report gives a mesh.
+        let mut json = serde_json::to_value(r)?;
+        json["dimension"] = 2.into();
+        json["vertices"] = out.curve.vertices.len().into();
+        json["faces"] = out.curve.edges.len().into();
+        json["components"] = out.curve.loops().into();
+        json["watertight"] = out.curve.is_closed().into();
         crate::reconstruct::write_json(path, &json)?;
     }
     if let Some(path) = extras.points {

@@ -90,44 +90,57 @@ impl Checks {
     }
 }
 
-/// Options shared by `reconstruct` and `demo`.
-#[derive(Debug, Clone, clap::Args)]
+/// Options shared by `reconstruct` and `demo`. The fields after `gpu` are named as
+/// [`rfta::Params`]' serde form names its settings (the Python package's keywords), and reach
+/// it through that form ([`Tuning::params`], [`Tuning::to_args`]): an option is added here with
+/// a field of the same name and nothing else.
+#[derive(Debug, Clone, clap::Args, serde::Serialize)]
 pub(crate) struct Tuning {
     /// Starting parameters; the options below override them.
     #[arg(long, value_enum, default_value_t = Preset::Default)]
+    #[serde(skip)]
     preset: Preset,
-    /// Fine-tuning rounds (k_max).
-    #[arg(long)]
-    iters: Option<usize>,
-    /// Maximum tangency points per sphere (n_max).
-    #[arg(long)]
-    max_points: Option<usize>,
-    /// Seed of every random choice.
-    #[arg(long)]
-    seed: Option<u64>,
     /// Rasterize on the GPU.
     #[arg(long, value_enum, default_value_t = Gpu::Off)]
+    #[serde(skip)]
     gpu: Gpu,
+    /// Fine-tuning rounds (k_max).
+    #[arg(long, visible_alias = "iters")]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rounds: Option<usize>,
+    /// Maximum tangency points per sphere (n_max).
+    #[arg(long, visible_alias = "max-points")]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_points_per_sphere: Option<usize>,
+    /// Seed of every random choice.
+    #[arg(long)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seed: Option<u64>,
     /// Closed islands smaller than this many sample spacings across stay only where a sample
     /// witnesses them, inside them or touching them where the rest of the mesh leaves a gap (0
     /// keeps all; default: the library's `Params::min_island`).
     #[arg(long, value_parser = crate::ui::parse_non_negative)]
+    #[serde(skip_serializing_if = "Option::is_none")]
     min_island: Option<f64>,
     /// The shape's genus, when known: the output becomes one surface of at most this genus (other
     /// components joined to the largest by a tube, the thinnest handles beyond it cut).
     #[arg(long)]
+    #[serde(skip_serializing_if = "Option::is_none")]
     genus: Option<usize>,
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
     /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
     /// samples always do).
     #[arg(long, value_name = "SPACINGS", value_parser = crate::ui::parse_non_negative)]
+    #[serde(skip_serializing_if = "Option::is_none")]
     owner_band: Option<f64>,
     /// Cells per axis of the empty-space rasterization (default: the paper's 64 ceil(n^(1/3) / 16)).
-    #[arg(long, value_name = "CELLS", value_parser = clap::value_parser!(u32).range(8..=1024))]
-    raster_res: Option<u32>,
+    #[arg(long, visible_alias = "raster-res", value_name = "CELLS", value_parser = clap::value_parser!(u32).range(8..=1024))]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    raster_resolution: Option<u32>,
     /// Octree depth of the screened Poisson solves (default: matched to the sample spacing,
     /// 4 finest cells per spacing; the reference always uses 10).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+    #[serde(skip_serializing_if = "Option::is_none")]
     depth: Option<u32>,
 }
 
@@ -137,61 +150,41 @@ pub(crate) fn preset_name(p: Preset) -> String {
 }
 
 impl Tuning {
+    /// The options given, by [`rfta::Params`]' serde names.
+    fn options(&self) -> serde_json::Map<String, serde_json::Value> {
+        match serde_json::to_value(self) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        }
+    }
+
     /// These options as `reconstruct` arguments (what `batch` passes to each row), with `preset`
     /// in place of `--preset` where given.
     pub(crate) fn to_args(&self, preset: Option<Preset>) -> Vec<String> {
+        let gpu = clap::ValueEnum::to_possible_value(&self.gpu)
+            .map_or_else(String::new, |v| v.get_name().to_string());
         let mut a = vec![
             "--preset".to_string(),
             preset_name(preset.unwrap_or(self.preset)),
+            "--gpu".to_string(),
+            gpu,
         ];
-        let mut opt = |name: &str, v: Option<String>| {
-            if let Some(v) = v {
-                a.extend([format!("--{name}"), v]);
-            }
-        };
-        opt("iters", self.iters.map(|v| v.to_string()));
-        opt("max-points", self.max_points.map(|v| v.to_string()));
-        opt("seed", self.seed.map(|v| v.to_string()));
-        opt("min-island", self.min_island.map(|v| v.to_string()));
-        opt("genus", self.genus.map(|v| v.to_string()));
-        opt("owner-band", self.owner_band.map(|v| v.to_string()));
-        opt("raster-res", self.raster_res.map(|v| v.to_string()));
-        opt("depth", self.depth.map(|v| v.to_string()));
-        let gpu = clap::ValueEnum::to_possible_value(&self.gpu)
-            .map_or_else(String::new, |v| v.get_name().to_string());
-        opt("gpu", Some(gpu));
+        for (name, value) in self.options() {
+            a.push(format!("--{}", name.replace('_', "-")));
+            a.push(match value {
+                serde_json::Value::String(s) => s,
+                v => v.to_string(),
+            });
+        }
         a
     }
 
-    fn params(&self) -> Params {
+    /// The preset, then the options given.
+    pub(crate) fn params(&self) -> Result<Params> {
         // Every variant's name is one of rfta::PRESETS (tested below).
         let mut p = Params::preset(&preset_name(self.preset)).unwrap_or_default();
-        if let Some(k) = self.iters {
-            p.rounds = k;
-        }
-        if let Some(m) = self.max_points {
-            p.max_points_per_sphere = m;
-        }
-        if let Some(s) = self.seed {
-            p.seed = s;
-        }
         p.gpu = !matches!(self.gpu, Gpu::Off);
-        if let Some(m) = self.min_island {
-            p.min_island = m;
-        }
-        if self.genus.is_some() {
-            p.genus = self.genus;
-        }
-        if self.depth.is_some() {
-            p.spsr_depth = self.depth;
-        }
-        if let Some(r) = self.raster_res {
-            p.raster_resolution = Some(r as usize);
-        }
-        if let Some(b) = self.owner_band {
-            p.owner_band = (b > 0.0).then_some(b);
-        }
-        p
+        Ok(p.with_options(self.options())?)
     }
 }
 
@@ -320,7 +313,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     files.check()?;
     if rfta_io::is_sdf_2d(&args.input)? {
         crate::ui::check_output_2d(&args.output)?;
-        let mut params = args.tuning.params();
+        let mut params = args.tuning.params()?;
         params.clamp = args.checks.clamp;
         params.check = !args.checks.no_check;
         let extras = crate::plane::Extras {
@@ -340,7 +333,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     if let Some(p) = &args.points {
         crate::ui::check_output(p)?;
     }
-    let mut params = args.tuning.params();
+    let mut params = args.tuning.params()?;
     params.clamp = args.checks.clamp;
     params.check = !args.checks.no_check;
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
@@ -396,30 +389,13 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     Ok(())
 }
 
-/// The report's key figures as one JSON object (the names of [`rfta::Report`]'s fields).
+/// The report as one JSON object: [`rfta::Report`]'s serde form, and the mesh's size and the
+/// command's seconds.
 fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result<()> {
-    let r = &out.report;
-    let c = &r.consistency;
-    let json = serde_json::json!({
-        "seconds": seconds,
-        "samples": r.samples,
-        "negative": r.negative,
-        "vertices": out.mesh.n_vertices(),
-        "faces": out.mesh.n_faces(),
-        "components": r.mesh.components,
-        "watertight": r.mesh.watertight,
-        "spheres_without_point": r.spheres_without_point,
-        "radius_scale": r.radius_scale,
-        "spacing": c.spacing,
-        "sign_errors": c.sign_errors,
-        "entered": c.entered,
-        "gaps": c.gaps,
-        "deepest_entry": c.deepest_entry,
-        "thin_loops": c.thin_loops,
-        "cavities": r.cavities,
-        "warnings": r.warnings,
-        "stopped_early": r.stopped_early,
-    });
+    let mut json = serde_json::to_value(&out.report)?;
+    json["vertices"] = out.mesh.n_vertices().into();
+    json["faces"] = out.mesh.n_faces().into();
+    json["seconds"] = seconds.into();
     write_json(path, &json)
 }
 
@@ -503,7 +479,7 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
         bail!("--res must be at least 2");
     }
     if args.two_d {
-        return crate::plane::demo(&output, res, &args.tuning.params(), ui);
+        return crate::plane::demo(&output, res, &args.tuning.params()?, ui);
     }
     let grid = Grid::cube(res, -1.0, 1.0)?;
     let values: Vec<f64> = (0..grid.len())
@@ -515,7 +491,7 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
         res + 1,
         grid.len()
     ));
-    let params = args.tuning.params();
+    let params = args.tuning.params()?;
     let t = Instant::now();
     let out = run_pipeline(&samples, &params, ui)?;
     describe(&out, ui, t.elapsed().as_secs_f64());

@@ -449,7 +449,11 @@ mod tests {
         let g = Grid::new([3, 4, 5], DVec3::ZERO, DVec3::new(0.1, 0.3, 0.2)).expect("grid");
         let grid = SdfSamples::grid(g, vec![1.0; 60]).expect("samples");
         assert_eq!(grid.spacing(), 0.3);
-        let positions = vec![DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0), DVec3::new(1.0, 3.0, 4.0)];
+        let positions = vec![
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(1.0, 3.0, 4.0),
+        ];
         let scattered = SdfSamples::scattered(positions, vec![1.0, -1.0, 1.0]).expect("samples");
         assert!((scattered.spacing() - 2.0).abs() < 1e-15);
     }

@@ -110,51 +110,37 @@ fn error(e: rfta::Error) -> PyErr {
     }
 }
 
-/// The parameters: a preset, then the overrides in `options` (names of `rfta::Params` fields).
+/// The parameters: a preset, then the overrides in `options` (`rfta::Params`' serde names, the
+/// one table of setting names; `None` values are left out).
 fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::Params> {
-    let mut p = rfta::Params::preset(preset).ok_or_else(|| {
+    let p = rfta::Params::preset(preset).ok_or_else(|| {
         PyValueError::new_err(format!(
             "preset '{preset}' is not one of {}",
             rfta::PRESETS.map(|n| format!("'{n}'")).join(", ")
         ))
     })?;
-    let Some(options) = options else {
-        return Ok(p);
-    };
-    for (key, value) in options.iter() {
+    let mut given = serde_json::Map::new();
+    for (key, value) in options.into_iter().flat_map(|o| o.iter()) {
         let key: String = key.extract()?;
-        if value.is_none() {
+        let json = if value.is_none() {
             continue;
-        }
-        let bad = |e: PyErr| PyValueError::new_err(format!("{key}: {e}"));
-        match key.as_str() {
-            "rounds" => p.rounds = value.extract().map_err(bad)?,
-            "max_points_per_sphere" => p.max_points_per_sphere = value.extract().map_err(bad)?,
-            "batch_size" => p.batch_size = value.extract().map_err(bad)?,
-            "screening" => p.screening = value.extract().map_err(bad)?,
-            "depth" => p.spsr_depth = Some(value.extract().map_err(bad)?),
-            "local_search_moves" => p.local_search_moves = value.extract().map_err(bad)?,
-            "transport_step" => p.transport_step = value.extract().map_err(bad)?,
-            "tolerance" => p.tolerance = value.extract().map_err(bad)?,
-            "raster_resolution" => p.raster_resolution = Some(value.extract().map_err(bad)?),
-            "clamp" => p.clamp = Some(value.extract().map_err(bad)?),
-            "check" => p.check = value.extract().map_err(bad)?,
-            "seed" => p.seed = value.extract().map_err(bad)?,
-            "threads" => p.threads = Some(value.extract().map_err(bad)?),
-            "owner_band" => {
-                let b: f64 = value.extract().map_err(bad)?;
-                p.owner_band = (b > 0.0).then_some(b);
-            }
-            "min_island" => p.min_island = value.extract().map_err(bad)?,
-            "genus" => p.genus = Some(value.extract().map_err(bad)?),
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "unknown parameter '{other}'"
-                )));
-            }
-        }
+        } else if let Ok(b) = value.extract::<bool>() {
+            b.into()
+        } else if let Ok(i) = value.extract::<u64>() {
+            i.into()
+        } else if let Ok(i) = value.extract::<i64>() {
+            i.into()
+        } else if let Ok(x) = value.extract::<f64>() {
+            serde_json::Number::from_f64(x).map_or(serde_json::Value::Null, Into::into)
+        } else {
+            return Err(PyValueError::new_err(format!(
+                "{key}: {} is not a number or a bool",
+                value.repr()?
+            )));
+        };
+        given.insert(key, json);
     }
-    Ok(p)
+    p.with_options(given).map_err(error)
 }
 
 /// A stage as the progress callback sees it: `(stage, done, of)`.
@@ -363,45 +349,14 @@ fn in_grid_order(index: &[usize], values: &[f64]) -> Vec<f64> {
     on_grid
 }
 
-/// The report as a dict (the names of `rfta::Report`'s fields).
+/// The report as a dict: `rfta::Report`'s serde form, and whether the samples were a grid.
 fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("samples", r.samples)?;
+    let text = serde_json::to_string(r).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let d: Bound<'py, PyDict> = py
+        .import("json")?
+        .call_method1("loads", (text,))?
+        .cast_into()?;
     d.set_item("grid", grid)?;
-    d.set_item("negative", r.negative)?;
-    d.set_item("raster_resolution", r.raster_resolution)?;
-    d.set_item("spsr_depth", r.spsr_depth)?;
-    d.set_item("feasible_initial", r.feasible_initial)?;
-    d.set_item("points_per_round", r.points_per_round.clone())?;
-    d.set_item("spheres_without_point", r.spheres_without_point)?;
-    d.set_item("far_spheres", r.far_spheres)?;
-    d.set_item("islands_removed", r.islands_removed)?;
-    d.set_item("unsupported_removed", r.unsupported_removed)?;
-    d.set_item("vertices_pushed_out", r.vertices_pushed_out)?;
-    d.set_item("vertices_added", r.vertices_added)?;
-    d.set_item("dents", r.dents)?;
-    d.set_item("side_errors", r.side_errors.clone())?;
-    d.set_item("stopped_early", r.stopped_early.clone())?;
-    d.set_item("clamp", r.clamp)?;
-    d.set_item("radius_scale", r.radius_scale)?;
-    d.set_item("components", r.mesh.components)?;
-    d.set_item("watertight", r.mesh.watertight)?;
-    let c = &r.consistency;
-    d.set_item("spacing", c.spacing)?;
-    d.set_item("sign_errors", c.sign_errors)?;
-    d.set_item("entered", c.entered)?;
-    d.set_item("gaps", c.gaps)?;
-    d.set_item("deepest_entry", c.deepest_entry)?;
-    d.set_item("thin_loops", c.thin_loops.clone())?;
-    d.set_item("components_joined", r.components_joined)?;
-    d.set_item("handles_cut", r.handles_cut)?;
-    d.set_item("cavities", r.cavities)?;
-    d.set_item("warnings", r.warnings.clone())?;
-    let timings = PyDict::new(py);
-    for (stage, t) in &r.timings {
-        timings.set_item(stage.to_string(), t.as_secs_f64())?;
-    }
-    d.set_item("timings", timings)?;
     Ok(d)
 }
 

@@ -47,9 +47,10 @@ pub const GAP_MARGIN: f64 = 0.25;
 pub const THIN_LOOP: f64 = std::f64::consts::PI;
 
 /// What [`measure`] found.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Consistency {
-    /// Samples checked.
+    /// Samples checked (not serialized: a [`crate::Report`] holds it as its own `samples`).
+    #[serde(skip)]
     pub samples: usize,
     /// The spacing `h` the margins are stated in (the samples' units).
     pub spacing: f64,

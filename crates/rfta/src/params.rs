@@ -6,6 +6,7 @@
 
 use rfta_geom::rng::hash;
 use rfta_spsr::SpsrParams;
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::{Error, Result};
 
@@ -14,7 +15,13 @@ pub const MAX_THREADS: usize = 4096;
 
 /// Parameters. Lengths (`transport_step`, `tolerance`) are in the normalized unit box, as in the
 /// reference. The paper's symbols are given for each.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// Its serde form is the one table of setting names behind every front end: the Python
+/// package's keywords, the command line's options (`--max-points-per-sphere`, ...) and
+/// [`Params::with_options`] all use these field names (`spsr_depth` as `depth`); a missing field
+/// is the default's, an unknown one an error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Params {
     /// Fine-tuning rounds, the paper's `k_max` (10).
     pub rounds: usize,
@@ -29,6 +36,7 @@ pub struct Params {
     pub screening: f64,
     /// Octree depth of the Poisson solves, on a box 3.2 times the unit box as in the reference;
     /// `None` matches it to the sample spacing ([`spsr_depth_for`]). The reference always runs 10.
+    #[serde(rename = "depth")]
     pub spsr_depth: Option<u32>,
     /// Moves of the feasibility local search (20).
     pub local_search_moves: usize,
@@ -65,7 +73,8 @@ pub struct Params {
     /// as in the reference. Scattered samples always give every sphere points: their spacing
     /// varies, and where samples near the surface are sparse the far spheres' points are needed
     /// (measured: 5,500 samples of a sphere, four in five far from it, mean vertex error 4x
-    /// larger with the band).
+    /// larger with the band). In the serde form 0 is `None` too.
+    #[serde(deserialize_with = "zero_is_none")]
     pub owner_band: Option<f64>,
     /// Closed components (other than the largest) whose bounding-box diagonal is below this many
     /// sample spacings stay only where the samples witness them: a sample inside of the sign their
@@ -110,6 +119,11 @@ impl Default for Params {
             genus: None,
         }
     }
+}
+
+/// `owner_band`'s serde form: a number of spacings, `0` or `null` for none.
+fn zero_is_none<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<f64>, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.filter(|&b| b != 0.0))
 }
 
 /// Cells of the finest octree depth per sample spacing that [`spsr_depth_for`] aims at.
@@ -174,6 +188,33 @@ impl Params {
             "fast" => Some(Self::fast()),
             _ => None,
         }
+    }
+
+    /// `self` with the settings `options` names (the serde field names; `null` is `None`): an
+    /// unknown name or a value of the wrong type is [`Error::InvalidParams`] naming it. The
+    /// values are not checked here; [`crate::reconstruct`] checks them.
+    pub fn with_options(
+        &self,
+        options: serde_json::Map<String, serde_json::Value>,
+    ) -> Result<Self> {
+        let merged = |options: serde_json::Map<String, serde_json::Value>| {
+            let mut all = match serde_json::to_value(self)? {
+                serde_json::Value::Object(all) => all,
+                _ => serde_json::Map::new(),
+            };
+            all.extend(options);
+            serde_json::from_value::<Self>(serde_json::Value::Object(all))
+        };
+        merged(options.clone()).map_err(|e| {
+            // serde names an unknown field but not the field whose value is wrong: found alone.
+            let culprit = options.iter().find(|(k, v)| {
+                merged([((*k).clone(), (*v).clone())].into_iter().collect()).is_err()
+            });
+            Error::InvalidParams(match culprit {
+                Some((k, _)) if !e.to_string().contains(k.as_str()) => format!("{k}: {e}"),
+                _ => e.to_string(),
+            })
+        })
     }
 
     /// The setting of the paper's Table 2 (its evaluation script): 20 rounds, 30 points per sphere.
@@ -412,5 +453,48 @@ mod tests {
         all.sort_unstable();
         all.dedup();
         assert_eq!(all.len(), n);
+    }
+
+    /// Options by the serde names: each lands in its field (`depth` in `spsr_depth`, an owner
+    /// band of 0 is none), the rest stay the preset's; a name that is no field, or a value of the
+    /// wrong type, is refused naming it.
+    #[test]
+    fn options_by_name_override_a_preset() {
+        let options = |v: serde_json::Value| match v {
+            serde_json::Value::Object(m) => m,
+            _ => unreachable!("an object"),
+        };
+        let fast = Params::fast();
+        let p = fast
+            .with_options(options(serde_json::json!({
+                "rounds": 7, "depth": 9, "owner_band": 0, "clamp": 0.25, "genus": 1, "check": false
+            })))
+            .expect("valid");
+        let expect = Params {
+            rounds: 7,
+            spsr_depth: Some(9),
+            owner_band: None,
+            clamp: Some(0.25),
+            genus: Some(1),
+            check: false,
+            ..Params::fast()
+        };
+        assert_eq!(p, expect);
+        for name in PRESETS {
+            let p = Params::preset(name).expect("a preset");
+            assert_eq!(p.with_options(serde_json::Map::new()).expect("same"), p);
+        }
+        let Err(Error::InvalidParams(why)) =
+            fast.with_options(options(serde_json::json!({"iters": 3})))
+        else {
+            panic!("an unknown name is refused");
+        };
+        assert!(why.contains("iters"), "{why}");
+        let Err(Error::InvalidParams(why)) =
+            fast.with_options(options(serde_json::json!({"rounds": "many"})))
+        else {
+            panic!("a wrong type is refused");
+        };
+        assert!(why.starts_with("rounds: ") && why.contains("many"), "{why}");
     }
 }

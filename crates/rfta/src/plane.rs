@@ -38,13 +38,14 @@ pub const PLANE_SCREENING: f64 = 4.0;
 /// nothing at 65^2, and a third of the time.
 const ROUND_CYCLES: usize = 0;
 
-/// What a 2D reconstruction did.
-#[derive(Debug, Clone, Default, PartialEq)]
+/// What a 2D reconstruction did (its serde form: these field names, as the command line's
+/// `--report` JSON writes them).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Report2 {
     /// Samples given.
     pub samples: usize,
     /// Circles that own tangency points.
-    pub owners: usize,
+    pub circles_with_points: usize,
     /// Tangency points in the final solve.
     pub points: usize,
     /// Depth of the Poisson solves.
@@ -231,7 +232,7 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         .collect();
     let report = Report2 {
         samples: samples.len(),
-        owners: owners.len(),
+        circles_with_points: owners.len(),
         points: cloud.points(),
         depth,
         rounds,

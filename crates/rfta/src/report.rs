@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use rfta_feasible::TangentPoints;
 use rfta_geom::TriMesh;
+use serde::{Serialize, Serializer};
 
 /// A pipeline stage, for progress reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -109,7 +110,12 @@ pub(crate) fn counted<T>(
 }
 
 /// What a reconstruction did.
-#[derive(Debug, Clone, Default, PartialEq)]
+///
+/// Its serde form is the one definition of the report's figures for every front end (the
+/// command line's `--report` JSON, the Python report dict, batch's status columns): one flat
+/// object with these field names, the mesh check's and the consistency check's fields beside
+/// them, and `timings` as seconds by step name.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Report {
     /// Samples (spheres).
     pub samples: usize,
@@ -174,19 +180,34 @@ pub struct Report {
     /// are `|s|`.
     pub radius_scale: Option<f64>,
     /// What the output mesh is like (checked before it is returned).
+    #[serde(flatten)]
     pub mesh: MeshCheck,
     /// How the output mesh agrees with every sample: sign errors, entered spheres, gaps
     /// ([`crate::consistency`]).
+    #[serde(flatten)]
     pub consistency: crate::Consistency,
     /// Things the caller should know: inconsistent samples, a detected clamp, more than 5% of the
     /// spheres without a point, a mesh that is not watertight.
     pub warnings: Vec<String>,
     /// Wall time of each step, in order.
+    #[serde(serialize_with = "seconds_by_step")]
     pub timings: Vec<(Step, Duration)>,
 }
 
+/// `timings` as a map from each step's name to its seconds, in order.
+fn seconds_by_step<S: Serializer>(
+    timings: &[(Step, Duration)],
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    s.collect_map(
+        timings
+            .iter()
+            .map(|(step, t)| (step.to_string(), t.as_secs_f64())),
+    )
+}
+
 /// Checks of the output mesh.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct MeshCheck {
     /// Faces with a repeated vertex index (none unless the extraction has a bug).
     pub degenerate_faces: usize,
@@ -237,6 +258,41 @@ mod tests {
         for (step, name) in steps {
             assert_eq!(step.to_string(), name);
         }
+    }
+
+    /// The serde form is flat: every field once, the mesh check's and the consistency check's
+    /// beside the report's own, the consistency's sample count given once, timings by name.
+    #[test]
+    fn the_report_serializes_flat_with_each_figure_once() {
+        let report = Report {
+            samples: 5,
+            mesh: MeshCheck {
+                components: 2,
+                ..MeshCheck::default()
+            },
+            consistency: crate::Consistency {
+                samples: 5,
+                sign_errors: 3,
+                ..crate::Consistency::default()
+            },
+            timings: vec![(Step::FinalSolve, Duration::from_millis(1500))],
+            ..Report::default()
+        };
+        let text = serde_json::to_string(&report).expect("serializes");
+        let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        assert_eq!(json["samples"], 5);
+        assert_eq!(json["components"], 2);
+        assert_eq!(json["sign_errors"], 3);
+        assert_eq!(json["timings"]["final screened Poisson"], 1.5);
+        let keys = json.as_object().expect("an object").len();
+        assert_eq!(
+            text.matches("\":").count() - 1,
+            keys,
+            "a key repeated: {text}"
+        );
+        // The report's own 25 fields, the mesh check's 6, the consistency check's 6 (its sample
+        // count left to the report's).
+        assert_eq!(keys, 25 + 6 + 6, "{text}");
     }
 
     #[test]

@@ -42,10 +42,10 @@ use rfta_mesh::MeshIndex;
 
 /// The rows of the summary table, in order: method and threads.
 const REPORT_ORDER: [(&str, usize); 5] = [
-    ("rfta", 2),
+    ("rfta-default", 2),
     ("rfta-fast", 2),
     ("mc", 1),
-    ("rfta", 1),
+    ("rfta-default", 1),
     ("gpytoolbox", 1),
 ];
 
@@ -209,10 +209,15 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         let mut these: Vec<(&str, usize)> = Vec::new();
         if scaling {
             for _ in 0..SCALING_REPEATS {
-                these.extend([("rfta", 2), ("rfta", 1), ("ceiling", 2), ("ceiling", 1)]);
+                these.extend([
+                    ("rfta-default", 2),
+                    ("rfta-default", 1),
+                    ("ceiling", 2),
+                    ("ceiling", 1),
+                ]);
             }
         } else {
-            these.push(("rfta", 2));
+            these.push(("rfta-default", 2));
         }
         these.extend([("rfta-fast", 2), ("mc", 1)]);
         if python.is_some() && a.res.contains(&input.n) {
@@ -492,7 +497,7 @@ fn report(
         "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (10 ms resolution: marching cubes shows 0). With more than one run (the default preset on 1 and 2 threads, {SCALING_REPEATS} runs each, alternating), a row is the run of median wall time.\n"
     )?;
     for &n in &ns {
-        let Some(rfta) = Scaling::of(rows, n, "rfta") else {
+        let Some(rfta) = Scaling::of(rows, n, "rfta-default") else {
             continue;
         };
         writeln!(
@@ -795,11 +800,9 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
             let grid = samples.as_grid().context("marching cubes needs a grid")?;
             rfta_mc::marching_cubes(grid, samples.values(), 0.0)
         }
-        "rfta" | "rfta-fast" => {
-            // The bench's `rfta` is the default preset (the eval's is the fast one, after the
-            // reference's rows).
-            let preset = if method == "rfta" { "default" } else { "fast" };
-            let base = rfta::Params::preset(preset).unwrap_or_default();
+        m if m.starts_with("rfta") => {
+            let base =
+                crate::method::rfta_params(m).with_context(|| format!("unknown method {m}"))?;
             let params = rfta::Params {
                 threads: Some(threads),
                 ..base

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper,rfta-genus]
-//!                  [--samples N] [--depth D] [--owner-band K] [--raster-res R] [--quick]
+//!                  [--samples N] [--depth D] [--owner-band K] [--raster-resolution R] [--quick]
 //!                  [--out DIR]
 //! cargo xtask eval --scenario noise,clamp,scattered,swept,collision,params [--levels L,..] [--inputs DIR] [--quick]
 //! ```
@@ -64,16 +64,9 @@ pub(crate) struct Row {
     pub(crate) status: String,
 }
 
-/// Overrides of the rfta methods' parameters, for the tables of docs/speed.md.
-#[derive(Debug, Default)]
-struct Tuning {
-    /// `--depth D`: screened Poisson depth.
-    depth: Option<u32>,
-    /// `--owner-band K`: sample spacings within which spheres own points (0: all).
-    owner_band: Option<f64>,
-    /// `--raster-res R`: cells per axis of the empty-space rasterization.
-    raster_res: Option<usize>,
-}
+/// Overrides of the rfta methods' parameters by `rfta::Params`' serde names (`--depth D`,
+/// `--owner-band K`, `--raster-resolution R`), for the tables of docs/speed.md.
+type Tuning = serde_json::Map<String, serde_json::Value>;
 
 struct Args {
     inputs: Option<PathBuf>,
@@ -135,22 +128,20 @@ fn parse(args: &[String]) -> Result<Args> {
                 }
             }
             "--samples" => a.samples = value()?.parse().context("--samples takes a number")?,
-            "--depth" => {
-                a.tuning.depth = Some(
-                    value()?
-                        .parse()
-                        .context("--depth takes a number (1 to 16)")?,
-                )
-            }
-            "--raster-res" => {
-                a.tuning.raster_res = Some(value()?.parse().context("--raster-res takes a number")?)
-            }
-            "--owner-band" => {
-                a.tuning.owner_band = Some(
-                    value()?
-                        .parse()
-                        .context("--owner-band takes a number of spacings (0: every sphere)")?,
-                )
+            "--depth" | "--owner-band" | "--raster-resolution" | "--raster-res" => {
+                let name = match flag.as_str() {
+                    "--raster-res" => "raster_resolution".to_string(),
+                    flag => flag.trim_start_matches('-').replace('-', "_"),
+                };
+                let number: f64 = value()?
+                    .parse()
+                    .with_context(|| format!("{flag} takes a number"))?;
+                let value = if number.fract() == 0.0 && number >= 0.0 {
+                    serde_json::Value::from(number as u64)
+                } else {
+                    serde_json::Value::from(number)
+                };
+                a.tuning.insert(name, value);
             }
             "--quick" => a.quick = true,
             "--scenario" => {
@@ -465,10 +456,8 @@ fn run_method(
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
         "rfta" | "rfta-default" | "rfta-paper" | "rfta-genus" => {
-            // `rfta` compares with the reference's `rfta` rows: gpytoolbox's defaults; the
-            // others are `rfta-PRESET`, and `rfta-genus` the default told the genus.
+            // `rfta-genus` is the default preset told the genus; the others name their preset.
             let base = match method {
-                "rfta" => rfta::Params::fast(),
                 "rfta-genus" => rfta::Params {
                     genus: Some(
                         gt_genus
@@ -477,20 +466,12 @@ fn run_method(
                     ),
                     ..rfta::Params::default()
                 },
-                _ => method
-                    .strip_prefix("rfta-")
-                    .and_then(rfta::Params::preset)
+                _ => crate::method::rfta_params(method)
                     .ok_or_else(|| format!("unknown method {method}"))?,
             };
-            let params = rfta::Params {
-                spsr_depth: tuning.depth.or(base.spsr_depth),
-                raster_resolution: tuning.raster_res.or(base.raster_resolution),
-                owner_band: match tuning.owner_band {
-                    Some(b) => (b > 0.0).then_some(b),
-                    None => base.owner_band,
-                },
-                ..base
-            };
+            let params = base
+                .with_options(tuning.clone())
+                .map_err(|e| e.to_string())?;
             let samples =
                 rfta_geom::SdfSamples::grid(*grid, values.to_vec()).map_err(|e| e.to_string())?;
             rfta::reconstruct(&samples, &params)

@@ -173,11 +173,10 @@ def reconstruct(
         Scattered sample positions (``S`` then has shape (n,)).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
     raster_resolution, min_island, genus, threads
-        The fields of ``rfta::Params`` of these names. ``rfta reconstruct``'s options (``rfta
-        reconstruct --help``) are the same with dashes (``--owner-band``, ``--min-island``),
-        except ``rounds`` (``--iters``), ``max_points_per_sphere`` (``--max-points``),
-        ``raster_resolution`` (``--raster-res``) and ``screening`` (no option: the CLI keeps the
-        preset's).
+        ``rfta::Params``' settings of these names (its serde form, the one table of names).
+        ``rfta reconstruct``'s options (``rfta reconstruct --help``) are the same with dashes
+        (``--max-points-per-sphere``, ``--owner-band``), except ``screening``, which has no
+        option (the CLI keeps the preset's), and ``threads`` (the global ``rfta --threads``).
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
     progress : callable(stage, done, of), optional
