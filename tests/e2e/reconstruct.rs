@@ -92,7 +92,7 @@ fn torus_at_16_cubed_is_genus_one_and_closer_than_marching_cubes() {
         "rfta mean {mean} vs marching cubes {mc_mean}"
     );
     assert_eq!(
-        out.report.points_per_round.len(),
+        out.report.rounds.points_per_round.len(),
         Params::default().rounds + 1
     );
 }

@@ -222,50 +222,50 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     let r = &out.report;
     ui.detail(format!(
         "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; screened Poisson depth {}; points per round {:?}; {} spheres without a point, {} far spheres (constraints only)",
-        r.samples, r.negative, r.raster_resolution, r.empty_space_points, r.feasible_initial, r.spsr_depth, r.points_per_round, r.spheres_without_point, r.far_spheres
+        r.input.samples, r.initial.negative, r.initial.raster_resolution, r.initial.empty_space_points, r.initial.feasible_initial, r.rounds.spsr_depth, r.rounds.points_per_round, r.final_solve.spheres_without_point, r.final_solve.far_spheres
     ));
     for (stage, t) in &r.timings {
         ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));
     }
-    if r.islands_removed > 0 {
+    if r.repair.islands_removed > 0 {
         ui.detail(format!(
             "removed {} small closed island(s) that no sample witnesses",
-            r.islands_removed
+            r.repair.islands_removed
         ));
     }
-    if r.unsupported_removed > 0 {
+    if r.repair.unsupported_removed > 0 {
         ui.detail(format!(
             "removed {} component(s) the samples contradict (inside sample spheres, or an inward-facing shell around nothing)",
-            r.unsupported_removed
+            r.repair.unsupported_removed
         ));
     }
-    if r.side_errors.len() > 1 {
+    if r.final_solve.side_errors.len() > 1 {
         ui.detail(format!(
             "the final solve put {} samples on the wrong side of (or at) its surface; re-solved with them screened toward their side: {}",
-            r.side_errors[0],
-            r.side_errors[1..]
+            r.final_solve.side_errors[0],
+            r.final_solve.side_errors[1..]
                 .iter()
                 .map(|n| n.to_string())
                 .collect::<Vec<_>>()
                 .join(", then ")
         ));
     }
-    if r.vertices_pushed_out > 0 {
+    if r.repair.vertices_pushed_out > 0 {
         ui.detail(format!(
             "moved {} vertices out of the sample spheres they entered ({} of them added where a face cut a sphere with no vertex inside)",
-            r.vertices_pushed_out, r.vertices_added
+            r.repair.vertices_pushed_out, r.repair.vertices_added
         ));
     }
-    if r.dents > 0 {
+    if r.repair.dents > 0 {
         ui.detail(format!(
             "split {} faces that cut a small sample sphere with the sample on the wrong side, and dented them past it",
-            r.dents
+            r.repair.dents
         ));
     }
-    if r.components_joined + r.handles_cut > 0 {
+    if r.repair.components_joined + r.repair.handles_cut > 0 {
         ui.say(format!(
             "to reach the genus asked: joined {} component(s) to the largest, cut {} handle(s)",
-            r.components_joined, r.handles_cut
+            r.repair.components_joined, r.repair.handles_cut
         ));
     }
     let c = &r.consistency;
@@ -280,7 +280,7 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
         c.gaps,
         rfta::consistency::GAP_MARGIN
     ));
-    if let Some(why) = &r.stopped_early {
+    if let Some(why) = &r.rounds.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));
     }
     for w in &r.warnings {

@@ -27,7 +27,8 @@ use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, TriMesh};
 
-use crate::{Error, MeshCheck, Params, Report, Result};
+use crate::report::{InputReport, Journal};
+use crate::{Error, MeshCheck, Params, Result};
 
 /// A separation ratio above this counts as a violation (1% above the exact bound of 1).
 pub const SEPARATION_TOLERANCE: f64 = 1.01;
@@ -279,15 +280,24 @@ pub const NOISE_FLOOR: f64 = 0.001;
 /// ([`Inspection::lipschitz_excess`]), are taken as noise of up to `n = max(q - 1, e)` of the
 /// value when `n` exceeds [`NOISE_FLOOR`]: a sample's own tangency points stay on its sphere of
 /// radius `|s|`, but as a constraint on the others' points its sphere shrinks by `1 / (1 + n)^2`
-/// ([`Report::radius_scale`]), the most an inflated neighbour can exceed a deflated sphere.
+/// ([`InputReport::radius_scale`]), the most an inflated neighbour can exceed a deflated sphere.
 /// Without it, 1% noise on a 21^3 grid cost most spheres near the surface every point.
-pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report) -> Result<()> {
+pub(crate) fn samples(
+    samples: &SdfSamples,
+    params: &Params,
+    journal: &mut Journal,
+) -> Result<InputReport> {
+    let mut report = InputReport {
+        samples: samples.len(),
+        clamp: params.clamp,
+        ..InputReport::default()
+    };
     let found = inspect(samples);
     report.inconsistent_samples = found.inconsistent;
     let noise = (found.overlap - 1.0).max(found.lipschitz_excess);
     if noise > NOISE_FLOOR {
         report.radius_scale = Some((1.0 + noise).powi(-2));
-        report.warnings.push(format!(
+        journal.warnings.push(format!(
             "the values look noisy, by up to {:.2}% of their magnitude (they change faster than a distance can, or overlap the other sign's): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
             100.0 * noise
         ));
@@ -296,7 +306,7 @@ pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report
         && let Some((c, count)) = found.clamp
     {
         report.clamp = Some(c);
-        report.warnings.push(format!(
+        journal.warnings.push(format!(
             "the values look clamped at {c}: {count} samples sit on flat plateaus at that magnitude; they are treated as at least {c} from the surface (set a clamp to override, or turn the check off)"
         ));
     }
@@ -335,9 +345,9 @@ pub(crate) fn samples(samples: &SdfSamples, params: &Params, report: &mut Report
                 SEVERE_RATIO
             )));
         }
-        report.warnings.push(what);
+        journal.warnings.push(what);
     }
-    Ok(())
+    Ok(report)
 }
 
 /// Refuses non-finite vertices and reports degenerate faces and `topo`, the mesh's topology.

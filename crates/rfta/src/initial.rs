@@ -9,19 +9,19 @@ use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
 use crate::params::Seeds;
-use crate::report::counted;
-use crate::{Error, Params, Report, Result, Stage};
+use crate::report::{InitialReport, Journal, counted};
+use crate::{Error, Params, Result, Stage};
 
 /// The initial tangency points, one sign set at a time: rasterize the set's spheres, take the
 /// nearest empty-space sample to each centre, make it feasible against a batch of the same set.
 pub(crate) fn initial_points(
     unit: &UnitBox,
     params: &Params,
-    report: &mut Report,
+    journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
-) -> Result<TangentPoints> {
+) -> Result<(TangentPoints, InitialReport)> {
     // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
-    drawing(unit, params, unit.raster_radius(params), report, progress)
+    drawing(unit, params, unit.raster_radius(params), journal, progress)
 }
 
 /// [`initial_points`] rasterizing the spheres smaller than `reach`.
@@ -29,14 +29,17 @@ fn drawing(
     unit: &UnitBox,
     params: &Params,
     reach: f64,
-    report: &mut Report,
+    journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
-) -> Result<TangentPoints> {
+) -> Result<(TangentPoints, InitialReport)> {
     progress(Stage::Initial);
     let t = Instant::now();
     let n = unit.len();
     let res = params.raster_resolution_for(n);
-    report.raster_resolution = res;
+    let mut report = InitialReport {
+        raster_resolution: res,
+        ..InitialReport::default()
+    };
     let backend = if params.gpu {
         rfta_raster::Backend::Gpu
     } else {
@@ -99,8 +102,8 @@ fn drawing(
     }
     let cloud = merge_by_owner(parts);
     report.feasible_initial = cloud.len();
-    report.timings.push((crate::Step::Rasterize, raster_time));
-    report
+    journal.timings.push((crate::Step::Rasterize, raster_time));
+    journal
         .timings
         .push((crate::Step::InitialPoints, t.elapsed() - raster_time));
     if cloud.len() < 3 && (neg.is_empty() || pos.is_empty()) {
@@ -119,7 +122,7 @@ fn drawing(
             spheres: n,
         });
     }
-    Ok(cloud)
+    Ok((cloud, report))
 }
 
 /// `b` indices drawn with replacement from `set` (all of it when `b` is 0 or at least its size).
@@ -175,7 +178,9 @@ mod tests {
         let undrawn = unit.spheres.iter().filter(|s| s.radius >= reach).count();
         assert!(undrawn * 4 > unit.len(), "{undrawn} of {}", unit.len());
         let run = |reach: f64| {
-            drawing(&unit, &params, reach, &mut Report::default(), &mut |_| {}).expect("points")
+            drawing(&unit, &params, reach, &mut Journal::default(), &mut |_| {})
+                .expect("points")
+                .0
         };
         let all = run(f64::INFINITY);
         let near = run(reach);

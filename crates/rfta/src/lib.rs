@@ -68,7 +68,10 @@ pub use params::{
     CELLS_PER_SPACING, MAX_THREADS, OWNER_BAND, PRESETS, Params, RASTER_REACH, ROUND_SWEEPS,
     SPSR_FULL_DEPTH, Seeds, spsr_depth_for,
 };
-pub use report::{MeshCheck, Reconstruction, Report, Stage, Step};
+pub use report::{
+    FinalSolveReport, InitialReport, InputReport, MeshCheck, Reconstruction, RepairReport, Report,
+    RoundsReport, Stage, Step,
+};
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -197,7 +200,7 @@ pub fn reconstruct_cancellable(
         for p in &mut out.points.points {
             *p /= factor;
         }
-        out.report.clamp = out.report.clamp.map(|c| c / factor);
+        out.report.input.clamp = out.report.input.clamp.map(|c| c / factor);
         out.report.consistency.spacing /= factor;
         return Ok(out);
     }
@@ -218,21 +221,43 @@ fn run(
             Ok(())
         }
     };
+    // Each stage returns its output and its own report; the warnings and the timings go to
+    // the journal, in order; the verdict reads them all.
+    let mut journal = report::Journal::default();
+    let input = if params.check {
+        let t = std::time::Instant::now();
+        let input = check::samples(samples, params, &mut journal)?;
+        journal.timed(Step::InputCheck, t);
+        input
+    } else {
+        report::InputReport {
+            samples: samples.len(),
+            clamp: params.clamp,
+            ..report::InputReport::default()
+        }
+    };
+    go_on()?;
+    let unit = normalize::UnitBox::new(samples, input.clamp, input.radius_scale);
+    let (cloud, initial) = initial::initial_points(&unit, params, &mut journal, progress)?;
+    let mut rounds = rounds::Rounds::new(&unit, params, cloud);
+    let rounds_report = rounds.run(&unit, params, &mut journal, progress, &go_on)?;
+    go_on()?;
+    let finished = finish::finish(samples, &unit, params, rounds, &mut journal, progress)?;
     let mut report = Report {
-        samples: samples.len(),
-        clamp: params.clamp,
+        input,
+        initial,
+        rounds: rounds_report,
+        final_solve: finished.final_solve,
+        repair: finished.repair,
         ..Report::default()
     };
-    if params.check {
-        let t = std::time::Instant::now();
-        check::samples(samples, params, &mut report)?;
-        report.timings.push((Step::InputCheck, t.elapsed()));
-    }
-    go_on()?;
-    let unit = normalize::UnitBox::new(samples, report.clamp, report.radius_scale);
-    let cloud = initial::initial_points(&unit, params, &mut report, progress)?;
-    let mut rounds = rounds::Rounds::new(&unit, params, cloud);
-    rounds.run(&unit, params, &mut report, progress, &go_on)?;
-    go_on()?;
-    finish::finish(samples, &unit, params, rounds, report, progress)
+    (report.mesh, report.consistency) =
+        finish::verdict(params, samples, &finished.mesh, &report, &mut journal)?;
+    report.warnings = journal.warnings;
+    report.timings = journal.timings;
+    Ok(Reconstruction {
+        mesh: finished.mesh,
+        points: finished.points,
+        report,
+    })
 }

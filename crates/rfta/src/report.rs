@@ -109,76 +109,29 @@ pub(crate) fn counted<T>(
     })
 }
 
-/// What a reconstruction did.
+/// What a reconstruction did: each stage's own report, then the verdict on the output mesh.
 ///
 /// Its serde form is the one definition of the report's figures for every front end (the
 /// command line's `--report` JSON, the Python report dict, batch's status columns): one flat
-/// object with these field names, the mesh check's and the consistency check's fields beside
-/// them, and `timings` as seconds by step name.
+/// object with every stage's fields (the mesh check's and the consistency check's too), and
+/// `timings` as seconds by step name.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Report {
-    /// Samples (spheres).
-    pub samples: usize,
-    /// Samples with `s < 0` and `s >= 0`.
-    pub negative: usize,
-    /// Samples with `s >= 0`.
-    pub non_negative: usize,
-    /// Rasterization resolution used.
-    pub raster_resolution: usize,
-    /// Octree depth of the screened Poisson solves.
-    pub spsr_depth: u32,
-    /// Empty-space points sampled (both signs).
-    pub empty_space_points: usize,
-    /// Spheres with a feasible initial tangency point.
-    pub feasible_initial: usize,
-    /// Tangency points before each fine-tuning round and at the end (`rounds + 1` entries unless
-    /// stopped early).
-    pub points_per_round: Vec<usize>,
-    /// Spheres without a tangency point at the end (clamped and zero-radius ones included).
-    pub spheres_without_point: usize,
-    /// Spheres farther than [`crate::Params::owner_band`] from the surface: constraints that own
-    /// no point (not counted in `spheres_without_point`).
-    pub far_spheres: usize,
-    /// Small closed islands removed from the final mesh because no sample witnesses them (see
-    /// [`crate::Params::min_island`]).
-    pub islands_removed: usize,
-    /// Samples the final screened Poisson function put on the wrong side, after its first solve
-    /// and after each re-solve that screened them toward their side
-    /// ([`rfta_spsr::reconstruct_with_sides`]); the last entry is the returned surface's.
-    pub side_errors: Vec<usize>,
-    /// Mesh vertices that were inside a sample sphere and moved out of it (`finish::push_out_of_spheres`
-    /// and `finish::clear_spheres`), counting those added to be moved.
-    pub vertices_pushed_out: usize,
-    /// Of those, vertices added where a face or an edge cut a sample sphere with none of its
-    /// vertices inside it.
-    pub vertices_added: usize,
-    /// Faces split so that a sample near the surface whose small sphere they cut lies on its own
-    /// side (a dent; see `finish::dent_wrong_side`).
-    pub dents: usize,
-    /// Components removed from the final mesh because the samples contradict them: every vertex
-    /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
-    /// other component around them.
-    pub unsupported_removed: usize,
-    /// Closed components of the output that face inward: cavities in the solid, each around
-    /// samples outside the shape (the island rule keeps no other). Unless the shape is hollow
-    /// there, a hole or a gap the surface closed; a warning says so.
-    pub cavities: usize,
-    /// Components joined to the largest by a tube to reach [`crate::Params::genus`] (0 without
-    /// it).
-    pub components_joined: usize,
-    /// Handles cut (the loop around each cut and both sides capped) to reach
-    /// [`crate::Params::genus`] (0 without it).
-    pub handles_cut: usize,
-    /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
-    pub stopped_early: Option<String>,
-    /// Samples that overlap a sample of the other sign (see [`crate::check`]; 0 when not checked).
-    pub inconsistent_samples: usize,
-    /// The clamp used: [`crate::Params::clamp`], or the one [`crate::Params::check`] detected.
-    pub clamp: Option<f64>,
-    /// The factor below 1 every sphere's radius `|s|` was shrunk by, when [`crate::Params::check`]
-    /// measured noise above [`crate::check::NOISE_FLOOR`] (see [`crate::check`]); `None`: radii
-    /// are `|s|`.
-    pub radius_scale: Option<f64>,
+    /// The input check's.
+    #[serde(flatten)]
+    pub input: InputReport,
+    /// The initial points'.
+    #[serde(flatten)]
+    pub initial: InitialReport,
+    /// The rounds'.
+    #[serde(flatten)]
+    pub rounds: RoundsReport,
+    /// The final solve's.
+    #[serde(flatten)]
+    pub final_solve: FinalSolveReport,
+    /// The repair's.
+    #[serde(flatten)]
+    pub repair: RepairReport,
     /// What the output mesh is like (checked before it is returned).
     #[serde(flatten)]
     pub mesh: MeshCheck,
@@ -192,6 +145,109 @@ pub struct Report {
     /// Wall time of each step, in order.
     #[serde(serialize_with = "seconds_by_step")]
     pub timings: Vec<(Step, Duration)>,
+}
+
+/// What the input check found (step 1, [`crate::check`]; without [`crate::Params::check`], the
+/// samples and the clamp given).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct InputReport {
+    /// Samples (spheres).
+    pub samples: usize,
+    /// Samples that overlap a sample of the other sign (see [`crate::check`]; 0 when not checked).
+    pub inconsistent_samples: usize,
+    /// The clamp used: [`crate::Params::clamp`], or the one [`crate::Params::check`] detected.
+    pub clamp: Option<f64>,
+    /// The factor below 1 every sphere's radius `|s|` was shrunk by, when [`crate::Params::check`]
+    /// measured noise above [`crate::check::NOISE_FLOOR`] (see [`crate::check`]); `None`: radii
+    /// are `|s|`.
+    pub radius_scale: Option<f64>,
+}
+
+/// What the empty-space sampling and the initial tangency points did (steps 2 and 3).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct InitialReport {
+    /// Samples with `s < 0` and `s >= 0`.
+    pub negative: usize,
+    /// Samples with `s >= 0`.
+    pub non_negative: usize,
+    /// Rasterization resolution used.
+    pub raster_resolution: usize,
+    /// Empty-space points sampled (both signs).
+    pub empty_space_points: usize,
+    /// Spheres with a feasible initial tangency point.
+    pub feasible_initial: usize,
+}
+
+/// What the screened Poisson solves and fine-tuning rounds did (steps 4 and 5).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct RoundsReport {
+    /// Octree depth of the screened Poisson solves.
+    pub spsr_depth: u32,
+    /// Tangency points before each fine-tuning round and at the end (`rounds + 1` entries unless
+    /// stopped early).
+    pub points_per_round: Vec<usize>,
+    /// Why fine-tuning stopped before `Params::rounds` rounds, if it did.
+    pub stopped_early: Option<String>,
+}
+
+/// What the final screened Poisson solve found (step 6, its first stage).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct FinalSolveReport {
+    /// Samples the final screened Poisson function put on the wrong side, after its first solve
+    /// and after each re-solve that screened them toward their side
+    /// ([`rfta_spsr::reconstruct_with_sides`]); the last entry is the returned surface's.
+    pub side_errors: Vec<usize>,
+    /// Spheres without a tangency point at the end (clamped and zero-radius ones included).
+    pub spheres_without_point: usize,
+    /// Spheres farther than [`crate::Params::owner_band`] from the surface: constraints that own
+    /// no point (not counted in `spheres_without_point`).
+    pub far_spheres: usize,
+}
+
+/// What the repair changed (step 6, `rfta-repair`'s steps).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct RepairReport {
+    /// Small closed islands removed from the final mesh because no sample witnesses them (see
+    /// [`crate::Params::min_island`]).
+    pub islands_removed: usize,
+    /// Components removed from the final mesh because the samples contradict them: every vertex
+    /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
+    /// other component around them.
+    pub unsupported_removed: usize,
+    /// Mesh vertices that were inside a sample sphere and moved out of it (`finish::push_out_of_spheres`
+    /// and `finish::clear_spheres`), counting those added to be moved.
+    pub vertices_pushed_out: usize,
+    /// Of those, vertices added where a face or an edge cut a sample sphere with none of its
+    /// vertices inside it.
+    pub vertices_added: usize,
+    /// Faces split so that a sample near the surface whose small sphere they cut lies on its own
+    /// side (a dent; see `finish::dent_wrong_side`).
+    pub dents: usize,
+    /// Components joined to the largest by a tube to reach [`crate::Params::genus`] (0 without
+    /// it).
+    pub components_joined: usize,
+    /// Handles cut (the loop around each cut and both sides capped) to reach
+    /// [`crate::Params::genus`] (0 without it).
+    pub handles_cut: usize,
+    /// Closed components of the output that face inward: cavities in the solid, each around
+    /// samples outside the shape (the island rule keeps no other). Unless the shape is hollow
+    /// there, a hole or a gap the surface closed; a warning says so.
+    pub cavities: usize,
+}
+
+/// What happened when, across the stages: the warnings and each step's time, in order (a
+/// [`Report`]'s `warnings` and `timings`).
+#[derive(Debug, Default)]
+pub(crate) struct Journal {
+    pub(crate) warnings: Vec<String>,
+    pub(crate) timings: Vec<(Step, Duration)>,
+}
+
+impl Journal {
+    /// `step` took from `start` until now.
+    pub(crate) fn timed(&mut self, step: Step, start: std::time::Instant) {
+        self.timings.push((step, start.elapsed()));
+    }
 }
 
 /// `timings` as a map from each step's name to its seconds, in order.
@@ -265,7 +321,14 @@ mod tests {
     #[test]
     fn the_report_serializes_flat_with_each_figure_once() {
         let report = Report {
-            samples: 5,
+            input: InputReport {
+                samples: 5,
+                ..InputReport::default()
+            },
+            repair: RepairReport {
+                cavities: 1,
+                ..RepairReport::default()
+            },
             mesh: MeshCheck {
                 components: 2,
                 ..MeshCheck::default()
@@ -283,6 +346,7 @@ mod tests {
         assert_eq!(json["samples"], 5);
         assert_eq!(json["components"], 2);
         assert_eq!(json["sign_errors"], 3);
+        assert_eq!(json["cavities"], 1);
         assert_eq!(json["timings"]["final screened Poisson"], 1.5);
         let keys = json.as_object().expect("an object").len();
         assert_eq!(
@@ -290,9 +354,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The report's own 25 fields, the mesh check's 6, the consistency check's 6 (its sample
-        // count left to the report's).
-        assert_eq!(keys, 25 + 6 + 6, "{text}");
+        // The stages' 4 + 5 + 3 + 3 + 8 fields, the mesh check's 6, the consistency check's 6
+        // (its sample count left to the input's), warnings and timings.
+        assert_eq!(keys, 4 + 5 + 3 + 3 + 8 + 6 + 6 + 2, "{text}");
     }
 
     #[test]

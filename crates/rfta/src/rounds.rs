@@ -10,8 +10,8 @@ use rfta_spsr::{SidePoint, SpsrParams};
 
 use crate::normalize::UnitBox;
 use crate::params::Seeds;
-use crate::report::counted;
-use crate::{Params, Report, Stage};
+use crate::report::{Journal, RoundsReport, counted};
+use crate::{Params, Stage};
 
 /// What lives across the rounds: the current tangency points and the settings of both stages.
 pub(crate) struct Rounds {
@@ -46,12 +46,15 @@ impl Rounds {
         &mut self,
         unit: &UnitBox,
         params: &Params,
-        report: &mut Report,
+        journal: &mut Journal,
         progress: &mut (dyn FnMut(Stage) + Send),
         go_on: &dyn Fn() -> crate::Result<()>,
-    ) -> crate::Result<()> {
+    ) -> crate::Result<RoundsReport> {
         let n = unit.len();
-        report.spsr_depth = self.spsr.depth;
+        let mut report = RoundsReport {
+            spsr_depth: self.spsr.depth,
+            ..RoundsReport::default()
+        };
         // Without batching every round tests against the same tree: built once.
         if params.rounds > 0 && params.batch_holds_all(n) {
             self.all = Some(SphereTree::new(&unit.spheres));
@@ -86,9 +89,7 @@ impl Rounds {
                     break;
                 }
             };
-            report
-                .timings
-                .push((crate::Step::RoundSolve(round), t.elapsed()));
+            journal.timed(crate::Step::RoundSolve(round), t);
             crate::pool::waiters_back();
             let t = Instant::now();
             // From the second round on, with every tree holding all spheres, the points were
@@ -110,9 +111,7 @@ impl Rounds {
                     Some(done),
                 )
             });
-            report
-                .timings
-                .push((crate::Step::RoundTune(round), t.elapsed()));
+            journal.timed(crate::Step::RoundTune(round), t);
             if next.len() < 3 {
                 report.stopped_early = Some(format!(
                     "round {round}: only {} feasible points remained",
@@ -122,7 +121,9 @@ impl Rounds {
             }
             self.cloud = next;
         }
-        Ok(())
+        // The points the final solve takes.
+        report.points_per_round.push(self.cloud.len());
+        Ok(report)
     }
 }
 

@@ -60,7 +60,7 @@ fn same_mesh_at_one_two_and_four_threads_and_across_runs() {
                 "{what} at {threads}"
             );
             assert_eq!(
-                first.report.points_per_round, again.report.points_per_round,
+                first.report.rounds.points_per_round, again.report.rounds.points_per_round,
                 "{what} at {threads}"
             );
         }
@@ -85,7 +85,7 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
     )
     .expect("sphere");
     let r = &out.report;
-    assert!(r.spheres_without_point >= zeros, "{r:?}");
+    assert!(r.final_solve.spheres_without_point >= zeros, "{r:?}");
     // A zero value gives no direction: those samples own no tangency point.
     for (i, &v) in samples.values().iter().enumerate() {
         if v == 0.0 {
@@ -93,10 +93,10 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
         }
     }
     assert!(r.mesh.watertight && r.mesh.boundary_edges == 0 && r.mesh.components == 1);
-    assert_eq!(r.inconsistent_samples, 0);
-    assert_eq!(r.clamp, None);
+    assert_eq!(r.input.inconsistent_samples, 0);
+    assert_eq!(r.input.clamp, None);
     // Under 5% of the spheres: counted, not a warning.
-    assert!(r.spheres_without_point * 20 < samples.len());
+    assert!(r.final_solve.spheres_without_point * 20 < samples.len());
     assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     assert!(out.mesh.vertices.iter().all(|v| v.is_finite()));
     // Every sample checked against the mesh: none on the wrong side, no sphere entered.
@@ -140,7 +140,7 @@ fn the_check_refuses_non_distances_and_detects_clamping() {
     let band = 2.0 / 6.0;
     let clamped = with(exact.iter().map(|v| v.clamp(-band, band)).collect());
     let out = reconstruct(&clamped, &fast).expect("clamped");
-    assert_eq!(out.report.clamp, Some(band));
+    assert_eq!(out.report.input.clamp, Some(band));
     assert!(out.report.warnings.iter().any(|w| w.contains("clamped")));
     let worst = out
         .mesh
@@ -298,7 +298,7 @@ fn spheres_beyond_the_owner_band_own_no_point_and_stay_constraints() {
         .collect();
     assert!(far.len() > samples.len() / 2, "{} far", far.len());
     let r = &out.report;
-    assert_eq!(r.far_spheres, far.len());
+    assert_eq!(r.final_solve.far_spheres, far.len());
     for &o in &out.points.owners {
         assert!(samples.values()[o as usize].abs() < band * h, "sample {o}");
     }
@@ -341,13 +341,13 @@ fn scattered_samples_ignore_the_owner_band() {
         },
     )
     .expect("torus");
-    assert_eq!(out.report.far_spheres, 0);
+    assert_eq!(out.report.final_solve.far_spheres, 0);
     let owners: std::collections::BTreeSet<u32> = out.points.owners.iter().copied().collect();
     assert!(
-        owners.len() + out.report.spheres_without_point == samples.len(),
+        owners.len() + out.report.final_solve.spheres_without_point == samples.len(),
         "{} owners, {} without a point, {} samples",
         owners.len(),
-        out.report.spheres_without_point,
+        out.report.final_solve.spheres_without_point,
         samples.len()
     );
     // The same band on a grid leaves most spheres without points.
@@ -362,9 +362,9 @@ fn scattered_samples_ignore_the_owner_band() {
     )
     .expect("torus grid");
     assert!(
-        banded.report.far_spheres * 2 > grid.len(),
+        banded.report.final_solve.far_spheres * 2 > grid.len(),
         "{:?}",
-        banded.report.far_spheres
+        banded.report.final_solve.far_spheres
     );
 }
 
@@ -385,7 +385,7 @@ fn a_thin_shape_between_grid_points_is_found_and_a_covered_box_has_no_surface() 
     );
     let out = reconstruct(&samples, &Params::default()).expect("a thin torus");
     let r = &out.report;
-    assert_eq!(r.negative, 0);
+    assert_eq!(r.initial.negative, 0);
     assert!(r.mesh.watertight && !out.mesh.is_empty());
     let topology = rfta_mesh::Topology::of(&out.mesh);
     assert_eq!((topology.components, topology.genus()), (1, Some(1)));
@@ -447,9 +447,9 @@ fn the_final_solve_puts_every_sample_on_its_side() {
     assert!(before.sign_errors > 0, "{before:?}");
     let r = &out.report;
     assert!(
-        r.side_errors[0] > 0 && r.side_errors.last() == Some(&0),
+        r.final_solve.side_errors[0] > 0 && r.final_solve.side_errors.last() == Some(&0),
         "{:?}",
-        r.side_errors
+        r.final_solve.side_errors
     );
     assert_eq!(r.consistency.sign_errors, 0, "{:?}", r.consistency);
     assert!(r.mesh.watertight);
@@ -498,7 +498,7 @@ fn noisy_values_keep_their_tangency_points() {
     };
     let exact = grid_samples(torus, 20);
     let clean = reconstruct(&exact, &Params::fast()).expect("clean");
-    assert_eq!(clean.report.radius_scale, None);
+    assert_eq!(clean.report.input.radius_scale, None);
 
     let mut rng = rfta::geom::rng::Rng::new(11);
     let grid = *exact.as_grid().expect("grid");
@@ -509,14 +509,14 @@ fn noisy_values_keep_their_tangency_points() {
         .collect();
     let samples = SdfSamples::grid(grid, noisy).expect("samples");
     let out = reconstruct(&samples, &Params::fast()).expect("noisy");
-    let scale = out.report.radius_scale.expect("noise measured");
+    let scale = out.report.input.radius_scale.expect("noise measured");
     // At most 1% inflation, twice over: the shrink is between 0.98 and 1.
     assert!((0.975..1.0).contains(&scale), "{scale}");
-    let owners = exact.len() - out.report.far_spheres;
+    let owners = exact.len() - out.report.final_solve.far_spheres;
     assert!(
-        out.report.spheres_without_point * 10 <= owners,
+        out.report.final_solve.spheres_without_point * 10 <= owners,
         "{} of {owners} spheres without a point",
-        out.report.spheres_without_point
+        out.report.final_solve.spheres_without_point
     );
     // Unchecked, the same values lose points to their inflated neighbours.
     let unchecked = Params {
@@ -525,9 +525,9 @@ fn noisy_values_keep_their_tangency_points() {
     };
     let blind = reconstruct(&samples, &unchecked).expect("unchecked");
     assert!(
-        blind.report.spheres_without_point * 4 > owners,
+        blind.report.final_solve.spheres_without_point * 4 > owners,
         "{} of {owners}",
-        blind.report.spheres_without_point
+        blind.report.final_solve.spheres_without_point
     );
     // Clamped as well (at 0.2, given): the clamped samples still own no point, though the noise
     // shrinks every other sphere.
@@ -543,7 +543,7 @@ fn noisy_values_keep_their_tangency_points() {
         ..Params::fast()
     };
     let out_both = reconstruct(&both, &given).expect("noisy and clamped");
-    assert!(out_both.report.radius_scale.is_some());
+    assert!(out_both.report.input.radius_scale.is_some());
     assert!(
         out_both
             .points
@@ -589,7 +589,10 @@ fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
     assert!(t.is_watertight() && t.is_consistently_oriented(), "{t:?}");
     assert_eq!((t.genus(), t.components), (Some(0), 1));
     assert_eq!(
-        (cut.report.handles_cut, cut.report.components_joined),
+        (
+            cut.report.repair.handles_cut,
+            cut.report.repair.components_joined
+        ),
         (1, 0)
     );
     // Every vertex on the torus (within 0.3 spacings, 0.1) but the centres of the two caps,
@@ -605,7 +608,7 @@ fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
     assert!(off.iter().all(|&d| (-0.2..-0.1).contains(&d)), "{off:?}");
     let more = asked(2);
     assert_eq!(rfta_mesh::Topology::of(&more.mesh).genus(), Some(1));
-    assert_eq!(more.report.handles_cut, 0);
+    assert_eq!(more.report.repair.handles_cut, 0);
     assert!(
         more.report
             .warnings
@@ -638,7 +641,7 @@ fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
     let t = rfta_mesh::Topology::of(&one.mesh);
     assert!(t.is_watertight() && t.is_consistently_oriented(), "{t:?}");
     assert_eq!((t.genus(), t.components), (Some(0), 1));
-    assert_eq!(one.report.components_joined, 1);
+    assert_eq!(one.report.repair.components_joined, 1);
 }
 
 /// A ball with a bubble in it (0.3 across, 3 spacings) comes out with the bubble as a cavity,
@@ -662,7 +665,7 @@ fn a_cavity_is_counted_and_warned_about() {
         SdfSamples::grid(grid, values).expect("samples")
     };
     let hollow = reconstruct(&sdf(true), &Params::default()).expect("reconstruct");
-    assert_eq!(hollow.report.cavities, 1);
+    assert_eq!(hollow.report.repair.cavities, 1);
     assert_eq!(hollow.report.mesh.components, 2);
     assert!(
         hollow
@@ -674,7 +677,7 @@ fn a_cavity_is_counted_and_warned_about() {
         hollow.report.warnings
     );
     let solid = reconstruct(&sdf(false), &Params::default()).expect("reconstruct");
-    assert_eq!(solid.report.cavities, 0);
+    assert_eq!(solid.report.repair.cavities, 0);
     assert!(solid.report.warnings.iter().all(|w| !w.contains("cavit")));
 }
 

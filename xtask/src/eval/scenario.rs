@@ -674,16 +674,17 @@ fn run_rfta(
             let r = &out.report;
             // Clamped spheres own no point by design: neither owners nor missing ones.
             let clamped = r
+                .input
                 .clamp
                 .map_or(0, |c| values.iter().filter(|v| v.abs() >= c).count());
             let row = ScenarioRow {
                 cpu_seconds,
                 chamfer: chamfer(&out.mesh)?,
-                owners: (r.samples - r.far_spheres).saturating_sub(clamped),
-                without_point: r.spheres_without_point.saturating_sub(clamped),
+                owners: (r.input.samples - r.final_solve.far_spheres).saturating_sub(clamped),
+                without_point: r.final_solve.spheres_without_point.saturating_sub(clamped),
                 measured: match scenario {
-                    Scenario::Noise => r.radius_scale.map_or(0.0, |s| s.powf(-0.5) - 1.0),
-                    Scenario::Clamp => r.clamp.map_or(0.0, |c| c / h),
+                    Scenario::Noise => r.input.radius_scale.map_or(0.0, |s| s.powf(-0.5) - 1.0),
+                    Scenario::Clamp => r.input.clamp.map_or(0.0, |c| c / h),
                     _ => 0.0,
                 },
                 status: match out.mesh.unreferenced_vertices() {

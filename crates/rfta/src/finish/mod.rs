@@ -19,8 +19,9 @@ use rfta_geom::{SdfSamples, TriMesh};
 use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
+use crate::report::{FinalSolveReport, Journal, RepairReport};
 use crate::rounds::Rounds;
-use crate::{Params, Reconstruction, Report, Result, Stage, Step, check, consistency};
+use crate::{Consistency, MeshCheck, Params, Report, Result, Stage, Step, check, consistency};
 
 use islands::{inverted_and_unenclosed, judge};
 use rfta_repair::{
@@ -28,30 +29,32 @@ use rfta_repair::{
     push_out_of_spheres, remove_islands, signed_volume, to_genus,
 };
 
-/// The last solve on the final points, and the [`Reconstruction`] in the input's coordinates.
+/// What the final solve and the repair hand back: the mesh and the final points in the input's
+/// coordinates, and the two stages' reports.
+pub(crate) struct Finished {
+    pub(crate) mesh: TriMesh,
+    pub(crate) points: TangentPoints,
+    pub(crate) final_solve: FinalSolveReport,
+    pub(crate) repair: RepairReport,
+}
+
+/// The last solve on the final points, then the repair.
 pub(crate) fn finish(
     samples: &SdfSamples,
     unit: &UnitBox,
     params: &Params,
     rounds: Rounds,
-    mut report: Report,
+    journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
-) -> Result<Reconstruction> {
+) -> Result<Finished> {
     progress(Stage::Final);
-    let solved = final_solve(unit, params, rounds, &mut report)?;
-    let mesh = repair(
-        samples,
-        unit,
-        params,
-        &solved.tree,
-        solved.mesh,
-        &mut report,
-    );
-    verdict(params, samples, &mesh, unit.len(), &mut report)?;
-    Ok(Reconstruction {
+    let (solved, final_solve) = final_solve(unit, params, rounds, journal)?;
+    let (mesh, repair) = repair(samples, unit, params, &solved.tree, solved.mesh, journal);
+    Ok(Finished {
         mesh,
         points: solved.points,
-        report,
+        final_solve,
+        repair,
     })
 }
 
@@ -71,17 +74,17 @@ fn final_solve(
     unit: &UnitBox,
     params: &Params,
     rounds: Rounds,
-    report: &mut Report,
-) -> Result<Solved> {
+    journal: &mut Journal,
+) -> Result<(Solved, FinalSolveReport)> {
     let cloud = rounds.cloud;
-    report.points_per_round.push(cloud.len());
+    let mut report = FinalSolveReport::default();
     crate::pool::waiters_back();
     let t = Instant::now();
     let sides = unit.sides();
     let solved = crate::rounds::solve(&cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
     report.side_errors = solved.report.side_errors;
     let mut mesh = solved.mesh;
-    report.timings.push((Step::FinalSolve, t.elapsed()));
+    journal.timed(Step::FinalSolve, t);
     let n = unit.len();
     let mut owners = cloud.owners.clone();
     owners.dedup();
@@ -97,7 +100,7 @@ fn final_solve(
         normals: cloud.normals,
         owners: cloud.owners,
     };
-    Ok(Solved { mesh, points, tree })
+    Ok((Solved { mesh, points, tree }, report))
 }
 
 /// Repair: components the samples contradict or do not witness removed, samples near the
@@ -110,8 +113,9 @@ fn repair(
     params: &Params,
     tree: &OnceLock<SphereTree>,
     mut mesh: TriMesh,
-    report: &mut Report,
-) -> TriMesh {
+    journal: &mut Journal,
+) -> (TriMesh, RepairReport) {
+    let mut report = RepairReport::default();
     crate::pool::waiters_back();
     let t = Instant::now();
     // The largest component in the unit box and the whole mesh, indexed on first use.
@@ -133,7 +137,7 @@ fn repair(
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
-    report.timings.push((Step::Components, t.elapsed()));
+    journal.timed(Step::Components, t);
     crate::pool::waiters_back();
     let t = Instant::now();
     // First radially out of the spheres that own points (near the surface and small, so the
@@ -164,7 +168,7 @@ fn repair(
         .count()
         + report.vertices_added;
     report.dents += dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
-    report.timings.push((Step::SpheresCleared, t.elapsed()));
+    journal.timed(Step::SpheresCleared, t);
     if let Some(genus) = params.genus {
         let t = Instant::now();
         (report.components_joined, report.handles_cut) = to_genus(
@@ -174,46 +178,46 @@ fn repair(
             consistency::THIN_LOOP,
             consistency::THIN_LOOP_MAX_GENUS,
         );
-        report.timings.push((Step::Topology, t.elapsed()));
+        journal.timed(Step::Topology, t);
     }
     report.cavities = face_components(&mesh)
         .iter()
         .filter(|faces| signed_volume(&mesh, faces) < 0.0)
         .count();
-    mesh
+    (mesh, report)
 }
 
-/// The verdict: the mesh checked ([`check::mesh`]) and measured against every sample
-/// ([`consistency::measure_with`]), and a warning for each thing the caller should know (`n`:
-/// the number of samples).
-fn verdict(
+/// The verdict on the output mesh, read with the stages' reports: the mesh checked
+/// ([`check::mesh`]) and measured against every sample ([`consistency::measure_with`]), and a
+/// warning for each thing the caller should know.
+pub(crate) fn verdict(
     params: &Params,
     samples: &SdfSamples,
     mesh: &TriMesh,
-    n: usize,
-    report: &mut Report,
-) -> Result<()> {
+    report: &Report,
+    journal: &mut Journal,
+) -> Result<(MeshCheck, Consistency)> {
     crate::pool::waiters_back();
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(mesh);
-    report.mesh = check::mesh(mesh, &topology)?;
-    report.consistency = consistency::measure_with(samples, mesh, &topology, report.clamp)?;
-    report.timings.push((Step::Consistency, t.elapsed()));
+    let checked = check::mesh(mesh, &topology)?;
+    let c = consistency::measure_with(samples, mesh, &topology, report.input.clamp)?;
+    journal.timed(Step::Consistency, t);
+    let n = samples.len();
     if let Some(genus) = params.genus {
         match topology.genus() {
-            Some(g) if g < genus as i64 => report.warnings.push(format!(
+            Some(g) if g < genus as i64 => journal.warnings.push(format!(
                 "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
             )),
-            Some(g) if g > genus as i64 => report.warnings.push(format!(
+            Some(g) if g > genus as i64 => journal.warnings.push(format!(
                 "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
                 consistency::THIN_LOOP_MAX_GENUS
             )),
             _ => {}
         }
     }
-    let c = &report.consistency;
     if !c.is_consistent() {
-        report.warnings.push(format!(
+        journal.warnings.push(format!(
             "the mesh disagrees with the samples: {} on the wrong side of it, {} whose sphere it enters by more than {} spacing (deepest: {:.2} spacings)",
             c.sign_errors,
             c.entered,
@@ -221,15 +225,15 @@ fn verdict(
             c.deepest_entry
         ));
     }
-    if report.cavities > 0 {
-        report.warnings.push(format!(
+    if report.repair.cavities > 0 {
+        journal.warnings.push(format!(
             "the mesh encloses {} cavit{} around samples outside the shape: unless the shape is hollow there, a hole or a gap the surface closed around them, which finer samples can open",
-            report.cavities,
-            if report.cavities == 1 { "y" } else { "ies" }
+            report.repair.cavities,
+            if report.repair.cavities == 1 { "y" } else { "ies" }
         ));
     }
     if let Some(&shortest) = c.thin_loops.first() {
-        report.warnings.push(format!(
+        journal.warnings.push(format!(
             "the mesh has {} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, which the samples can neither confirm nor rule out; finer samples can",
             c.thin_loops.len(),
             consistency::THIN_LOOP
@@ -237,24 +241,24 @@ fn verdict(
     }
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
-    let eligible = n - report.far_spheres;
-    if report.spheres_without_point * 20 > eligible {
-        report.warnings.push(format!(
+    let eligible = n - report.final_solve.far_spheres;
+    if report.final_solve.spheres_without_point * 20 > eligible {
+        journal.warnings.push(format!(
             "{} of {eligible} spheres ended without a tangency point (clamped, zero-valued, or covered by other spheres)",
-            report.spheres_without_point
+            report.final_solve.spheres_without_point
         ));
     }
-    if !report.mesh.watertight {
-        report.warnings.push(format!(
+    if !checked.watertight {
+        journal.warnings.push(format!(
             "the mesh is not watertight: {} boundary and {} non-manifold edges",
-            report.mesh.boundary_edges, report.mesh.nonmanifold_edges
+            checked.boundary_edges, checked.nonmanifold_edges
         ));
     }
-    if report.mesh.zero_area_faces > 0 {
-        report.warnings.push(format!(
+    if checked.zero_area_faces > 0 {
+        journal.warnings.push(format!(
             "the mesh has {} faces of zero area ({} with a repeated vertex)",
-            report.mesh.zero_area_faces, report.mesh.degenerate_faces
+            checked.zero_area_faces, checked.degenerate_faces
         ));
     }
-    Ok(())
+    Ok((checked, c))
 }
