@@ -1,0 +1,314 @@
+//! A reconstruction's three phases, each its own function: the octree over the merged samples
+//! ([`Octree::build`]), the solve, re-solved while side points are on the wrong side
+//! ([`solve_with_sides`]), and the extraction ([`extract_surface`]).
+
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::sides::{SIDE_PASSES, SIDE_RESOLVE_SWEEPS, Sides};
+use crate::{
+    Error, OrientedPoints, Reconstruction, Result, SidePoint, SpsrParams, SpsrReport, TriMesh,
+    extract, glam, solve, tree,
+};
+
+/// What a solve keeps for the next one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Keep {
+    /// Nothing: a cold solve.
+    Nothing,
+    /// Its coefficients and the octree's node index ([`crate::Workspace`]).
+    Coefficients,
+}
+
+/// The three phases.
+pub(crate) fn run(
+    points: &OrientedPoints,
+    params: &SpsrParams,
+    sides: &[SidePoint],
+    warm: Option<&solve::WarmStart>,
+    keep: Keep,
+) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
+    let mut octree = Octree::build(points, params)?;
+    let solved = solve_with_sides(&mut octree, params, sides, warm);
+    extract_surface(points, octree, solved, keep)
+}
+
+/// The first phase's result: the samples (points merged per finest cell, with their density
+/// estimate) in the unit cube of `frame`, and the graded octree over them.
+struct Octree {
+    frame: tree::Frame,
+    samples: Vec<tree::Sample>,
+    levels: Vec<tree::Level>,
+    depth: u32,
+    /// The depth up to which the grids are complete.
+    base: u32,
+    /// Time spent building it (and rebuilding it, when side points refine it).
+    time: Duration,
+}
+
+impl Octree {
+    fn build(points: &OrientedPoints, params: &SpsrParams) -> Result<Self> {
+        if points.len() < 3 {
+            return Err(Error::TooFewPoints {
+                found: points.len(),
+            });
+        }
+        let t = Instant::now();
+        let frame = tree::Frame::around(points, params.box_scale)?;
+        let depth = params.depth;
+        let base = params.full_depth.min(depth);
+        let mut samples = tree::merge(points, &frame, depth);
+        if samples.len() < 3 {
+            return Err(Error::DegenerateInput(format!(
+                "the points fall into {} cell(s) of the depth-{depth} grid (or have zero weight): too few to define a surface",
+                samples.len()
+            )));
+        }
+        tree::estimate_density(&mut samples, params, base);
+        let levels = tree::build_levels(&samples, &[], depth, base);
+        Ok(Self {
+            frame,
+            samples,
+            levels,
+            depth,
+            base,
+            time: t.elapsed(),
+        })
+    }
+
+    /// The iso-value of `sol`: the weighted mean of the function at the samples (summed in
+    /// order, the same bits at any thread count).
+    fn iso_value(&self, sol: &solve::Solution) -> f64 {
+        let vals: Vec<f64> = self
+            .samples
+            .par_iter()
+            .map(|s| solve::evaluate(&self.levels, sol, s.pos, self.base))
+            .collect();
+        let (mut num, mut den) = (0.0, 0.0);
+        for (s, f) in self.samples.iter().zip(&vals) {
+            num += s.weight * f;
+            den += s.weight;
+        }
+        num / den
+    }
+}
+
+/// The solve's result before extraction: the solution and its iso-value, the first pass's (while
+/// side re-solves ran) with the octree it was solved on when the octree was refined since, the
+/// side points on the wrong side after each pass, and the time spent.
+struct Solved {
+    sol: solve::Solution,
+    iso: f64,
+    first: Option<(solve::Solution, f64)>,
+    first_levels: Option<Vec<tree::Level>>,
+    side_errors: Vec<usize>,
+    system_time: Duration,
+    solve_time: Duration,
+}
+
+/// The solve, then while side points are on the wrong side (at most [`SIDE_PASSES`] times)
+/// screening terms for them and a re-solve from the solution before, on the same octree unless
+/// a wrong point's cell needs refining ([`crate::reconstruct_with_sides`]).
+fn solve_with_sides(
+    octree: &mut Octree,
+    params: &SpsrParams,
+    sides: &[SidePoint],
+    warm: Option<&solve::WarmStart>,
+) -> Solved {
+    let t = Instant::now();
+    let total_w: f64 = octree.samples.iter().map(|s| s.weight).sum();
+    let total_a: f64 = octree.samples.iter().map(|s| s.area).sum();
+    let alpha = params.screening * total_a / total_w;
+    let base = octree.base;
+    // The normal field's terms and the first pass's systems (no value constraints yet) do not
+    // depend on each other: built side by side.
+    let ((mut v, mut down), first_systems) = rayon::join(
+        || {
+            let v = solve::splat_normals(&octree.levels, &octree.samples);
+            let down = solve::down_pass(&octree.levels, &v);
+            (v, down)
+        },
+        || solve::build_systems(&octree.levels, &octree.samples, &[], params, alpha),
+    );
+    let mut first_systems = Some(first_systems);
+    let mut sides = Sides::in_cube(sides, &octree.frame);
+    let mut system_time = t.elapsed();
+    let mut solve_time = Duration::ZERO;
+    // The first solve's solution and iso-value, kept while re-solves run.
+    let mut first: Option<(solve::Solution, f64)> = None;
+    // Side points the octree was refined around, and its first version when it was.
+    let mut seeds: Vec<glam::DVec3> = Vec::new();
+    let mut first_levels: Option<Vec<tree::Level>> = None;
+    // Whether the warm start's nodes are those of an octree rebuilt since.
+    let mut stale_nodes = false;
+    // A re-solve's start: the previous solve's coefficients on the same nodes.
+    let mut resolve: Option<solve::WarmStart> = None;
+    let resolve_params = SpsrParams {
+        iterations: SIDE_RESOLVE_SWEEPS.min(params.iterations),
+        ..params.clone()
+    };
+    let (sol, iso) = loop {
+        let t1 = Instant::now();
+        let systems = match first_systems.take() {
+            Some(systems) => systems,
+            None => solve::build_systems(
+                &octree.levels,
+                &octree.samples,
+                sides.constraints(),
+                params,
+                alpha,
+            ),
+        };
+        let last = sides.is_empty() || sides.errors().len() == SIDE_PASSES;
+        system_time += t1.elapsed();
+        let t2 = Instant::now();
+        let (pass, start) = match &resolve {
+            Some(start) => (&resolve_params, Some(start)),
+            None => (params, warm),
+        };
+        let sol = solve::solve(&octree.levels, &systems, &v, &down, pass, base, start);
+        drop(systems);
+        let iso = octree.iso_value(&sol);
+        if sides.is_empty() {
+            solve_time += t2.elapsed();
+            break (sol, iso);
+        }
+        let at = |p: glam::DVec3| solve::evaluate(&octree.levels, &sol, p, base);
+        let wrong = sides.wrong(&at, iso, last);
+        solve_time += t2.elapsed();
+        if last || wrong.is_empty() {
+            break (sol, iso);
+        }
+        // The octree stays (unless refined below): its node index is copied once, the
+        // coefficients each pass.
+        let node_index =
+            |levels: &[tree::Level]| levels.iter().map(|l| l.node_index.clone()).collect();
+        let start = resolve.get_or_insert_with(|| solve::WarmStart {
+            nodes: node_index(&octree.levels),
+            x: Vec::new(),
+        });
+        if std::mem::take(&mut stale_nodes) {
+            start.nodes = node_index(&octree.levels);
+        }
+        let coarse =
+            sides.in_coarse_cells(&wrong, &octree.levels[octree.depth as usize], octree.depth);
+        if first.is_none() {
+            start.x = sol.x.clone();
+            first = Some((sol, iso));
+        } else {
+            start.x = sol.x;
+        }
+        sides.constrain(&wrong, iso, total_w, octree.samples.len());
+        if !coarse.is_empty() {
+            // A wrong side point in a cell the octree does not refine to its finest depth: its
+            // constraint would act on the depths whose cells hold it, while the finer depths'
+            // hats that reach it (around the finer cells beside it) are solved without it and
+            // undo it. The octree is rebuilt with such points refined as the samples are; the
+            // next solve starts from this one's coefficients on the nodes both octrees share.
+            let t = Instant::now();
+            seeds.extend(coarse);
+            let rebuilt = tree::build_levels(&octree.samples, &seeds, octree.depth, base);
+            first_levels.get_or_insert(std::mem::replace(&mut octree.levels, rebuilt));
+            octree.time += t.elapsed();
+            let t = Instant::now();
+            v = solve::splat_normals(&octree.levels, &octree.samples);
+            down = solve::down_pass(&octree.levels, &v);
+            stale_nodes = true;
+            system_time += t.elapsed();
+        }
+    };
+    Solved {
+        sol,
+        iso,
+        first,
+        first_levels,
+        side_errors: sides.into_errors(),
+        system_time,
+        solve_time,
+    }
+}
+
+/// The surface of `solved` on the octree's levels (the first pass's, when a re-solve pulled it
+/// out of the cube and the first pass's stayed inside), in world coordinates, with the report;
+/// and what `keep` asks for the next solve.
+fn extract_surface(
+    points: &OrientedPoints,
+    octree: Octree,
+    solved: Solved,
+    keep: Keep,
+) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
+    let Octree {
+        frame,
+        samples,
+        mut levels,
+        time: tree_time,
+        ..
+    } = octree;
+    let Solved {
+        sol,
+        iso,
+        first,
+        first_levels,
+        mut side_errors,
+        system_time,
+        solve_time,
+    } = solved;
+    let t3 = Instant::now();
+    let solve::Solution { x, u } = sol;
+    let mut values = extract::final_values(&levels, &u);
+    drop(u);
+    // Only the coefficients outlive the extraction, and only when the next solve will use them.
+    let kept_x = (keep == Keep::Coefficients).then_some(x);
+    let mut iso = iso;
+    // A re-solve that pulls the surface out of the cube (where it would come out open) while the
+    // first solve's stayed inside is dropped for the first solve's surface.
+    let mut on_first = false;
+    if let Some((sol, first_iso)) = first
+        && extract::leaves_cube(&levels, &values, iso)
+    {
+        let lv = first_levels.as_deref().unwrap_or(&levels);
+        let plain = extract::final_values(lv, &sol.u);
+        if !extract::leaves_cube(lv, &plain, first_iso) {
+            values = plain;
+            iso = first_iso;
+            side_errors.truncate(1);
+            on_first = true;
+        }
+    }
+    let surface_levels = match &first_levels {
+        Some(lv) if on_first => lv,
+        _ => &levels,
+    };
+    let mut ex = extract::extract(surface_levels, &values, iso);
+    if ex.faces.is_empty() || !iso.is_finite() {
+        return Err(Error::NoSurface { iso });
+    }
+    extract::to_world(&frame, &mut ex.vertices);
+    let next = kept_x.map(|x| solve::WarmStart {
+        nodes: levels
+            .iter_mut()
+            .map(|l| std::mem::take(&mut l.node_index))
+            .collect(),
+        x,
+    });
+    let extract_time = t3.elapsed();
+    let mesh = TriMesh {
+        vertices: ex.vertices,
+        faces: ex.faces,
+    };
+    let report = SpsrReport {
+        points: points.len(),
+        samples: samples.len(),
+        nodes_per_depth: levels.iter().map(|l| l.nodes.len()).collect(),
+        cells_per_depth: levels.iter().map(|l| l.cells.len()).collect(),
+        iso_value: iso,
+        side_errors,
+        broken_leaves: ex.broken_leaves,
+        tree_time,
+        system_time,
+        solve_time,
+        extract_time,
+    };
+    Ok((Reconstruction { mesh, report }, next))
+}
