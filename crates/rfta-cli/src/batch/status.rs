@@ -1,0 +1,293 @@
+//! Status files: one row per manifest row run, its status, time, message and report figures;
+//! read back by a rerun (rows done are skipped) and merged across shards.
+
+use super::*;
+
+/// How a row ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub(super) enum Status {
+    Ok,
+    NoSurface,
+    Failed,
+    Timeout,
+    Skipped,
+}
+
+impl Status {
+    pub(super) const ALL: [Status; 5] = [
+        Status::Ok,
+        Status::NoSurface,
+        Status::Failed,
+        Status::Timeout,
+        Status::Skipped,
+    ];
+
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::NoSurface => "no_surface",
+            Status::Failed => "failed",
+            Status::Timeout => "timeout",
+            Status::Skipped => "skipped",
+        }
+    }
+
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|x| x.name() == s)
+    }
+
+    /// A status that fails the batch.
+    pub(super) fn is_failure(self) -> bool {
+        matches!(self, Status::Failed | Status::Timeout)
+    }
+}
+
+/// The report figures a status row carries (from `reconstruct --report`: [`rfta::Report`]'s
+/// serde names, and the mesh's `vertices` and `faces`).
+pub(super) const FIGURES: [&str; 8] = [
+    "samples",
+    "vertices",
+    "faces",
+    "components",
+    "watertight",
+    "sign_errors",
+    "entered",
+    "gaps",
+];
+
+/// The columns of a status file.
+pub(super) fn header() -> Vec<String> {
+    ["row", "input", "output", "status", "seconds", "message"]
+        .into_iter()
+        .chain(FIGURES)
+        .map(String::from)
+        .collect()
+}
+
+/// One row of a status file.
+#[derive(Debug, Clone)]
+pub(super) struct StatusRow {
+    /// The manifest row (0-based, header excluded).
+    pub(super) row: usize,
+    /// As the manifest says (relative to its folder).
+    pub(super) input: String,
+    pub(super) output: String,
+    pub(super) status: Status,
+    pub(super) seconds: f64,
+    pub(super) message: String,
+    /// [`FIGURES`], empty where unknown.
+    pub(super) figures: Vec<String>,
+}
+
+impl StatusRow {
+    /// The row as the progress output shows it.
+    pub(super) fn line(&self) -> String {
+        format!(
+            "{} {} -> {}: {}{}",
+            self.status.name(),
+            self.input,
+            self.output,
+            if self.message.is_empty() {
+                format!("{:.2} s", self.seconds)
+            } else {
+                self.message.clone()
+            },
+            if self.status == Status::Ok {
+                String::new()
+            } else {
+                format!(" ({:.2} s)", self.seconds)
+            }
+        )
+    }
+
+    pub(super) fn fields(&self) -> Vec<String> {
+        [
+            self.row.to_string(),
+            self.input.clone(),
+            self.output.clone(),
+            self.status.name().to_string(),
+            format!("{:.3}", self.seconds),
+            self.message.clone(),
+        ]
+        .into_iter()
+        .chain(self.figures.iter().cloned())
+        .collect()
+    }
+
+    /// The record on `row` of a status `table`, as written (fields untrimmed, empty ones kept).
+    pub(super) fn parse(table: &rfta_io::table::Table, row: &rfta_io::table::Row) -> Option<Self> {
+        let get = |name: &str| table.column(name).and_then(|i| row.fields.get(i)).cloned();
+        Some(Self {
+            row: get("row")?.parse().ok()?,
+            input: get("input")?,
+            output: get("output")?,
+            status: Status::parse(&get("status")?)?,
+            seconds: get("seconds")?.parse().ok()?,
+            message: get("message").unwrap_or_default(),
+            figures: FIGURES.iter().map(|f| get(f).unwrap_or_default()).collect(),
+        })
+    }
+}
+
+/// The status row's figures from a `reconstruct --report` file (empty where it is unreadable).
+pub(super) fn figures(report: &Path) -> Vec<String> {
+    let json: Option<serde_json::Value> = std::fs::read(report)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok());
+    FIGURES
+        .iter()
+        .map(|f| {
+            json.as_ref()
+                .and_then(|j| j.get(f))
+                .map(|v| v.to_string())
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// The rows of a status file (none if it does not exist).
+pub(super) fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let table = rfta_io::table::read_table(path)?;
+    if !["row", "input", "output", "status"]
+        .iter()
+        .all(|c| table.column(c).is_some())
+    {
+        bail!(
+            "{}: not an rfta batch status file (header: {})",
+            path.display(),
+            table.columns.join(",")
+        );
+    }
+    // Rows are appended whole, line break last: a line cut short by a kill (no line break, or
+    // too few fields) is no record, and its row runs again.
+    Ok(table
+        .rows
+        .iter()
+        .filter(|r| r.complete && r.fields.len() == table.columns.len())
+        .filter_map(|r| StatusRow::parse(&table, r))
+        .collect())
+}
+
+/// The rows of an earlier run that need not run again: the last word on each row is `ok` or
+/// `skipped` and its output exists. Returned as `skipped`.
+pub(super) fn earlier_rows(path: &Path, base: &Path) -> Result<Vec<StatusRow>> {
+    Ok(last_by_row(read_status(path)?)
+        .into_iter()
+        .filter(|r| matches!(r.status, Status::Ok | Status::Skipped))
+        .filter(|r| base.join(&r.output).is_file())
+        .map(|mut r| {
+            if r.status == Status::Ok {
+                r.status = Status::Skipped;
+                r.message = format!("done by an earlier run in {:.2} s", r.seconds);
+            }
+            r
+        })
+        .collect())
+}
+
+/// The last record of each row (a rerun appends after the row it redoes), in manifest order.
+pub(super) fn last_by_row(rows: Vec<StatusRow>) -> Vec<StatusRow> {
+    let mut last: HashMap<usize, StatusRow> = HashMap::new();
+    for r in rows {
+        last.insert(r.row, r);
+    }
+    let mut rows: Vec<StatusRow> = last.into_values().collect();
+    rows.sort_by_key(|r| r.row);
+    rows
+}
+
+/// A status file written a row at a time.
+pub(super) struct StatusFile {
+    pub(super) file: File,
+}
+
+impl StatusFile {
+    /// Starts `path` afresh (atomically) with `rows`, then opens it for appending.
+    pub(super) fn create(path: &Path, rows: &[StatusRow]) -> Result<Self> {
+        rfta_io::write_atomic(path, |w| {
+            writeln!(w, "{}", rfta_io::table::join_csv(&header()))?;
+            for r in rows {
+                writeln!(w, "{}", rfta_io::table::join_csv(&r.fields()))?;
+            }
+            Ok(())
+        })?;
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .with_context(|| format!("{}: cannot open for appending", path.display()))?;
+        Ok(Self { file })
+    }
+
+    pub(super) fn append(&mut self, row: &StatusRow) -> Result<()> {
+        writeln!(self.file, "{}", rfta_io::table::join_csv(&row.fields()))?;
+        self.file.sync_data()?;
+        Ok(())
+    }
+}
+
+/// `--merge`: the rows of every status file, in manifest order, with totals.
+pub(super) fn merge(paths: &[PathBuf], out: Option<&Path>) -> Result<()> {
+    let mut all: Vec<StatusRow> = Vec::new();
+    for p in paths {
+        if !p.is_file() {
+            bail!("{}: no such status file", p.display());
+        }
+        all.extend(read_status(p)?);
+    }
+    let rows = last_by_row(all);
+    let out = out.map_or_else(
+        || {
+            paths[0]
+                .parent()
+                .unwrap_or(Path::new("."))
+                .join("merged.status.csv")
+        },
+        Path::to_path_buf,
+    );
+    let mut files = crate::paths::Files::new();
+    for (k, p) in paths.iter().enumerate() {
+        files.read(format!("status file {}", k + 1), p);
+    }
+    files.write("the merged table (--status)", &out).check()?;
+    rfta_io::write_atomic(&out, |w| {
+        writeln!(w, "{}", rfta_io::table::join_csv(&header()))?;
+        for r in &rows {
+            writeln!(w, "{}", rfta_io::table::join_csv(&r.fields()))?;
+        }
+        Ok(())
+    })?;
+    let mut table = String::from("| status | rows | seconds |\n|---|---|---|\n");
+    for s in Status::ALL {
+        let these: Vec<&StatusRow> = rows.iter().filter(|r| r.status == s).collect();
+        if !these.is_empty() {
+            table += &format!(
+                "| {} | {} | {:.1} |\n",
+                s.name(),
+                these.len(),
+                these.iter().map(|r| r.seconds).sum::<f64>()
+            );
+        }
+    }
+    table += &format!(
+        "| all | {} | {:.1} |\n",
+        rows.len(),
+        rows.iter().map(|r| r.seconds).sum::<f64>()
+    );
+    crate::ui::print_line(&format!(
+        "{} rows from {} status file(s), merged into {}\n\n{table}",
+        rows.len(),
+        paths.len(),
+        out.display()
+    ))?;
+    if rows.iter().any(|r| r.status.is_failure()) {
+        return Err(Exit::some_failed(format!(
+            "{} row(s) failed or timed out",
+            rows.iter().filter(|r| r.status.is_failure()).count()
+        ))
+        .into());
+    }
+    Ok(())
+}

@@ -1,0 +1,139 @@
+use super::*;
+
+#[test]
+fn shards_cover_every_row_once() {
+    for count in 1..7 {
+        for row in 0..50 {
+            let owners = (0..count)
+                .filter(|&index| Shard { index, count }.takes(row))
+                .count();
+            assert_eq!(owners, 1, "row {row} of {count} shards");
+        }
+    }
+    assert!(parse_shard("3/3").is_err());
+    assert!(parse_shard("1/0").is_err());
+    assert_eq!(parse_shard("2/5"), Ok(Shard { index: 2, count: 5 }));
+}
+
+/// A row's clamp and preset replace the command line's, never repeat them (clap refuses an
+/// option given twice).
+#[test]
+fn a_rows_clamp_and_preset_replace_the_command_lines() {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+    let cli = Cli::try_parse_from(["rfta", "m.csv", "--clamp", "0.5", "--preset", "paper"])
+        .expect("options");
+    let row = row_args(None, Some("0.25".into()), Some("fast".into())).expect("row");
+    let mut args = cli.args.checks.to_args(row.clamp);
+    args.extend(cli.args.tuning.to_args(row.preset));
+    let count = |flag: &str| args.iter().filter(|a| *a == flag).count();
+    assert_eq!((count("--clamp"), count("--preset")), (1, 1));
+    assert!(args.windows(2).any(|w| w == ["--clamp", "0.25"]));
+    assert!(args.windows(2).any(|w| w == ["--preset", "fast"]));
+    // Without row values, the command line's.
+    let args = cli.args.checks.to_args(None);
+    assert!(args.windows(2).any(|w| w == ["--clamp", "0.5"]));
+}
+
+/// Every `reconstruct` option of `Checks` and `Tuning` reaches the rows: set them all on
+/// the command line and `to_args` gives each back (an option added to either and forgotten in
+/// its `to_args` fails here).
+#[test]
+fn every_reconstruct_option_reaches_the_rows() {
+    use clap::{Args as _, Parser};
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+    let cli = Cli::try_parse_from([
+        "rfta",
+        "m.csv",
+        "--clamp",
+        "0.5",
+        "--no-check",
+        "--max-memory",
+        "2G",
+        "--preset",
+        "paper",
+        "--iters",
+        "4",
+        "--max-points",
+        "5",
+        "--seed",
+        "9",
+        "--gpu",
+        "on",
+        "--min-island",
+        "0.25",
+        "--owner-band",
+        "2",
+        "--raster-res",
+        "64",
+        "--depth",
+        "7",
+        "--genus",
+        "0",
+    ])
+    .expect("options");
+    let mut given: Vec<String> = cli.args.checks.to_args(None);
+    given.extend(cli.args.tuning.to_args(None));
+    let flags: std::collections::BTreeSet<String> = given
+        .iter()
+        .filter_map(|a| a.strip_prefix("--"))
+        .map(String::from)
+        .collect();
+    let declared = Tuning::augment_args(Checks::augment_args(clap::Command::new("t")));
+    let all: std::collections::BTreeSet<String> = declared
+        .get_arguments()
+        .filter_map(|a| a.get_long().map(String::from))
+        .collect();
+    assert_eq!(flags, all);
+    // And the values are the ones given.
+    for pair in [
+        ["--rounds", "4"],
+        ["--preset", "paper"],
+        ["--max-memory", "2147483648B"],
+    ] {
+        assert!(given.windows(2).any(|w| w == pair), "{pair:?} in {given:?}");
+    }
+    // Read back, they make the same parameters.
+    let again = Cli::try_parse_from(
+        ["rfta".to_string(), "m.csv".into()]
+            .into_iter()
+            .chain(given),
+    )
+    .expect("options");
+    let params = |c: &Cli| c.args.tuning.params().expect("valid");
+    assert_eq!(params(&again), params(&cli));
+    assert_eq!(params(&cli).rounds, 4);
+    assert_eq!(params(&cli).spsr_depth, Some(7));
+}
+
+/// The status columns are figures of the report `reconstruct --report` writes (its
+/// [`rfta::Report`] and the mesh's size), by the same names.
+#[test]
+fn the_status_figures_are_report_figures() {
+    let report = serde_json::to_value(rfta::Report::default()).expect("serializes");
+    for f in FIGURES {
+        assert!(
+            report.get(f).is_some() || ["vertices", "faces"].contains(&f),
+            "{f} is no figure of the report"
+        );
+    }
+}
+
+#[test]
+fn bad_row_columns_are_reasons_not_errors() {
+    assert!(row_args(Some("0 0 0 1 1".into()), None, None).is_err());
+    assert!(row_args(None, Some("-1".into()), None).is_err());
+    assert!(row_args(None, None, Some("fastest".into())).is_err());
+    let row = row_args(Some("-1 -1 -1 1 1 1".into()), None, Some("Fast".into()));
+    let row = row.expect("a good row");
+    assert_eq!(row.args, ["--bounds=-1,-1,-1,1,1,1"]);
+    assert!(matches!(row.preset, Some(Preset::Fast)));
+}
