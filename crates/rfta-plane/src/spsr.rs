@@ -402,6 +402,42 @@ pub fn solve(
     domain: Domain,
     params: &SpsrParams,
 ) -> Result<Solution, SpsrError> {
+    check(points, normals, domain, params)?;
+    let depth = params.depth;
+    let coarsest = COARSEST.min(depth);
+    let lengths = lengths(points, domain, depth);
+    let field = normal_field(points, normals, &lengths, domain, depth, coarsest);
+    let levels = systems(points, &lengths, domain, params, coarsest);
+    let rhs = right_hand_side(&levels[depth as usize], &field[depth as usize]);
+    let x = multigrid(&levels, rhs, depth, coarsest, params);
+    let m = levels[depth as usize].line.n + 1;
+    let h = cell_side(domain, depth);
+    let grid = Grid2::new([m, m], domain.min, DVec2::splat(h))
+        .map_err(|e| SpsrError::InvalidParams(e.to_string()))?;
+    let mut solution = Solution {
+        grid,
+        values: x,
+        iso: 0.0,
+    };
+    let total: f64 = lengths.iter().sum();
+    solution.iso = points
+        .iter()
+        .zip(&lengths)
+        .map(|(&p, &l)| solution.value(p) * l)
+        .sum::<f64>()
+        / total;
+    Ok(solution)
+}
+
+/// The inputs refused: lengths that differ, fewer than 2 points, a depth outside 1 to 12, a
+/// negative or non-finite screening, a bad domain, a non-finite point or normal, a zero normal,
+/// a point outside the domain.
+fn check(
+    points: &[DVec2],
+    normals: &[DVec2],
+    domain: Domain,
+    params: &SpsrParams,
+) -> Result<(), SpsrError> {
     if points.len() != normals.len() {
         return Err(SpsrError::LengthMismatch {
             points: points.len(),
@@ -432,13 +468,20 @@ pub fn solve(
             return Err(SpsrError::OutsideDomain(i));
         }
     }
-    let depth = params.depth;
-    let coarsest = COARSEST.min(depth);
-    let cells = |d: u32| 1usize << d;
-    let h = |d: u32| domain.side / cells(d) as f64;
+    Ok(())
+}
 
-    // Density: the points near each point, counted with the hats two depths above the finest;
-    // a point on a line of points `s` apart counts `h_d / s` of them, so `s = h_d / count`.
+/// The side of a cell at depth `d` of `domain`.
+fn cell_side(domain: Domain, d: u32) -> f64 {
+    domain.side / (1usize << d) as f64
+}
+
+/// The curve length each point stands for: the points near each point, counted with the hats two
+/// depths above the finest; a point on a line of points `s` apart counts `h_d / s` of them, so
+/// `s = h_d / count`.
+fn lengths(points: &[DVec2], domain: Domain, depth: u32) -> Vec<f64> {
+    let cells = |d: u32| 1usize << d;
+    let h = |d: u32| cell_side(domain, d);
     let density_depth = depth.saturating_sub(2).max(1);
     let (nd, hd) = (cells(density_depth), h(density_depth));
     let mut counts = vec![0.0; (nd + 1) * (nd + 1)];
@@ -451,8 +494,7 @@ pub fn solve(
             counts[(hat.cell.0 + k / 2) * (nd + 1) + hat.cell.1 + k % 2] += w;
         }
     }
-    let lengths: Vec<f64> = hats
-        .iter()
+    hats.iter()
         .map(|hat| {
             let c: f64 = (0..4)
                 .map(|k| {
@@ -461,14 +503,26 @@ pub fn solve(
                 .sum();
             hd / c.max(1e-12)
         })
-        .collect();
+        .collect()
+}
 
-    // The normal field: each point splatted, with its length, at the depth whose cell is about
-    // its spacing, then carried to the finest depth (the spaces are nested, so exactly).
+/// The normal field on every depth's nodes: each point splatted, with its length, at the depth
+/// whose cell is about its spacing, then carried to the finer depths (the spaces are nested, so
+/// exactly).
+fn normal_field(
+    points: &[DVec2],
+    normals: &[DVec2],
+    lengths: &[f64],
+    domain: Domain,
+    depth: u32,
+    coarsest: u32,
+) -> Vec<Vec<DVec2>> {
+    let cells = |d: u32| 1usize << d;
+    let h = |d: u32| cell_side(domain, d);
     let mut field: Vec<Vec<DVec2>> = (0..=depth)
         .map(|d| vec![DVec2::ZERO; (cells(d) + 1) * (cells(d) + 1)])
         .collect();
-    for ((&p, &n), &l) in points.iter().zip(normals).zip(&lengths) {
+    for ((&p, &n), &l) in points.iter().zip(normals).zip(lengths) {
         let d =
             ((domain.side / l).log2().floor() as i64).clamp(coarsest as i64, depth as i64) as u32;
         let hat = Hat::at(p, domain.min, h(d), cells(d));
@@ -487,9 +541,23 @@ pub fn solve(
         }
     }
 
-    // The systems of every depth.
+    field
+}
+
+/// The system of every depth: its grid and, from the coarsest solved depth on, the screening
+/// stencils of the nodes near points.
+fn systems(
+    points: &[DVec2],
+    lengths: &[f64],
+    domain: Domain,
+    params: &SpsrParams,
+    coarsest: u32,
+) -> Vec<Level> {
+    let depth = params.depth;
+    let cells = |d: u32| 1usize << d;
+    let h = |d: u32| cell_side(domain, d);
     let alpha = params.screening / h(depth);
-    let levels: Vec<Level> = (0..=depth)
+    (0..=depth)
         .map(|d| {
             let line = Line {
                 n: cells(d),
@@ -499,7 +567,7 @@ pub fn solve(
             let mut slot = vec![NONE; if d >= coarsest { m * m } else { 0 }];
             let mut screening: Vec<[f64; 9]> = Vec::new();
             if d >= coarsest {
-                for (&p, &l) in points.iter().zip(&lengths) {
+                for (&p, &l) in points.iter().zip(lengths) {
                     let hat = Hat::at(p, domain.min, h(d), line.n);
                     for a in 0..4 {
                         let (ai, aj) = (hat.cell.0 + a / 2, hat.cell.1 + a % 2);
@@ -526,14 +594,14 @@ pub fn solve(
                 screening,
             }
         })
-        .collect();
+        .collect()
+}
 
-    // Right-hand side at the finest depth: int grad(phi_i) . V.
-    let fine = &levels[depth as usize];
+/// The right-hand side at the finest depth, `fine`: `int grad(phi_i) . V` over the field `v`.
+fn right_hand_side(fine: &Level, v: &[DVec2]) -> Vec<f64> {
     let line = fine.line;
     let m = line.n + 1;
-    let v = &field[depth as usize];
-    let rhs: Vec<f64> = (0..m * m)
+    (0..m * m)
         .into_par_iter()
         .with_min_len(256)
         .map(|k| {
@@ -564,10 +632,19 @@ pub fn solve(
             }
             b
         })
-        .collect();
+        .collect()
+}
 
-    // Full multigrid: the right-hand side restricted to every depth, solved on the coarsest,
-    // prolonged and improved by a V-cycle at each finer depth, then `cycles` more at the finest.
+/// Full multigrid: the right-hand side restricted to every depth, solved on the coarsest,
+/// prolonged and improved by a V-cycle at each finer depth, then `cycles` more at the finest.
+fn multigrid(
+    levels: &[Level],
+    rhs: Vec<f64>,
+    depth: u32,
+    coarsest: u32,
+    params: &SpsrParams,
+) -> Vec<f64> {
+    let cells = |d: u32| 1usize << d;
     let mut rhs_at = vec![Vec::new(); depth as usize + 1];
     rhs_at[depth as usize] = rhs;
     for d in (coarsest..depth).rev() {
@@ -578,7 +655,7 @@ pub fn solve(
     for d in coarsest + 1..=depth {
         x = prolong(&x, cells(d - 1));
         v_cycle(
-            &levels,
+            levels,
             d,
             coarsest,
             &mut x,
@@ -588,7 +665,7 @@ pub fn solve(
     }
     for _ in 0..params.cycles {
         v_cycle(
-            &levels,
+            levels,
             depth,
             coarsest,
             &mut x,
@@ -597,21 +674,7 @@ pub fn solve(
         );
     }
 
-    let grid = Grid2::new([m, m], domain.min, DVec2::splat(h(depth)))
-        .map_err(|e| SpsrError::InvalidParams(e.to_string()))?;
-    let mut solution = Solution {
-        grid,
-        values: x,
-        iso: 0.0,
-    };
-    let total: f64 = lengths.iter().sum();
-    solution.iso = points
-        .iter()
-        .zip(&lengths)
-        .map(|(&p, &l)| solution.value(p) * l)
-        .sum::<f64>()
-        / total;
-    Ok(solution)
+    x
 }
 
 /// Sweeps on the coarsest grid (5 x 5 nodes).

@@ -175,16 +175,7 @@ impl GpuRasterizer {
         {
             return Ok(None);
         }
-        let mut data: Vec<u32> = Vec::with_capacity(spheres.len().max(1) * SPHERE_WORDS);
-        for s in spheres {
-            data.extend(s.c.map(|v| v as u32));
-            data.push(s.r2);
-            data.extend(s.lo);
-            data.extend(s.hi);
-        }
-        if data.is_empty() {
-            data.resize(SPHERE_WORDS, 0);
-        }
+        let data = sphere_words(spheres);
         let sphere_buf = self
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -224,48 +215,17 @@ impl GpuRasterizer {
             .max()
             .unwrap_or(0);
         let per_dispatch = limits.max_compute_workgroups_per_dimension.min(65_535) * WORKGROUP;
-        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
-        }
-        // One bind group per chunk of spheres (the chunk's offset is in its parameters).
-        let mut binds = Vec::new();
-        let mut offset = 0u32;
-        while (offset as usize) < spheres.len() {
-            let n = (spheres.len() as u32 - offset).min(per_dispatch);
-            let p = Params {
-                res: res as u32,
-                words_per_column: (2 * words_per_column64) as u32,
-                seed: seed32(params.seed),
-                n_spheres: spheres.len() as u32,
-                sphere_offset: offset,
-                n_blocks: n_blocks as u32,
-                block_words_per_column: block_words as u32,
-                pad: 0,
-            };
-            let param_buf = self
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("raster params"),
-                    contents: bytemuck::bytes_of(&p),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-
-            let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("raster_spheres"),
-                layout: &self.layout,
-                entries: &[
-                    entry(0, &param_buf),
-                    entry(1, &sphere_buf),
-                    entry(2, &occ_buf),
-                    entry(3, &covered_buf),
-                ],
-            });
-            binds.push((bind, n));
-            offset += n;
-        }
+        let base = Params {
+            res: res as u32,
+            words_per_column: (2 * words_per_column64) as u32,
+            seed: seed32(params.seed),
+            n_spheres: spheres.len() as u32,
+            sphere_offset: 0,
+            n_blocks: n_blocks as u32,
+            block_words_per_column: block_words as u32,
+            pad: 0,
+        };
+        let binds = self.bind_groups(base, per_dispatch, [&sphere_buf, &occ_buf, &covered_buf]);
         // Separate passes order the phases: every cover write lands before any raster read, and
         // every raster write before the fill.
         let mut encoder = self
@@ -293,12 +253,65 @@ impl GpuRasterizer {
             pass.dispatch_workgroups(groups, groups, 1);
         }
         self.queue.submit([encoder.finish()]);
+        let words = self.read_back(&occ_buf, &read_buf)?;
+        self.take_errors()?;
+        Ok(Some(BitGrid::from_words(res, words)))
+    }
+
+    /// One bind group per chunk of at most `per_dispatch` spheres, with `base`'s parameters and
+    /// the chunk's offset, over `buffers` (spheres, occupancy, covered blocks).
+    fn bind_groups(
+        &self,
+        base: Params,
+        per_dispatch: u32,
+        buffers: [&wgpu::Buffer; 3],
+    ) -> Vec<(wgpu::BindGroup, u32)> {
+        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
+        }
+        let [sphere_buf, occ_buf, covered_buf] = buffers;
+        let mut binds = Vec::new();
+        let mut offset = 0u32;
+        while offset < base.n_spheres {
+            let n = (base.n_spheres - offset).min(per_dispatch);
+            let p = Params {
+                sphere_offset: offset,
+                ..base
+            };
+            let param_buf = self
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("raster params"),
+                    contents: bytemuck::bytes_of(&p),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("raster_spheres"),
+                layout: &self.layout,
+                entries: &[
+                    entry(0, &param_buf),
+                    entry(1, sphere_buf),
+                    entry(2, occ_buf),
+                    entry(3, covered_buf),
+                ],
+            });
+            binds.push((bind, n));
+            offset += n;
+        }
+        binds
+    }
+
+    /// The words of `buf`, through `read_buf` (as large, mappable).
+    fn read_back(&self, buf: &wgpu::Buffer, read_buf: &wgpu::Buffer) -> Result<Vec<u64>, Error> {
         let mut encoder = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("readback"),
             });
-        encoder.copy_buffer_to_buffer(&occ_buf, 0, &read_buf, 0, None);
+        encoder.copy_buffer_to_buffer(buf, 0, read_buf, 0, None);
         self.queue.submit([encoder.finish()]);
         let (tx, rx) = std::sync::mpsc::channel();
         read_buf.map_async(wgpu::MapMode::Read, .., move |r| {
@@ -319,9 +332,24 @@ impl GpuRasterizer {
             .collect();
         drop(view);
         read_buf.unmap();
-        self.take_errors()?;
-        Ok(Some(BitGrid::from_words(res, words)))
+        Ok(words)
     }
+}
+
+/// The spheres as the shader reads them, [`SPHERE_WORDS`] words each (one sphere of zeros when
+/// there are none: a buffer may not be empty).
+fn sphere_words(spheres: &[QSphere]) -> Vec<u32> {
+    let mut data: Vec<u32> = Vec::with_capacity(spheres.len().max(1) * SPHERE_WORDS);
+    for s in spheres {
+        data.extend(s.c.map(|v| v as u32));
+        data.push(s.r2);
+        data.extend(s.lo);
+        data.extend(s.hi);
+    }
+    if data.is_empty() {
+        data.resize(SPHERE_WORDS, 0);
+    }
+    data
 }
 
 #[cfg(test)]

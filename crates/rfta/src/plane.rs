@@ -96,25 +96,15 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     if params.check {
         check_separation(samples, params.max_inconsistent)?;
     }
-    // Normalize as the reference does: the longer side of the samples' box becomes 1.
-    let (lo, hi) = samples.bounds();
-    let scale = (hi - lo).max_element().max(f64::MIN_POSITIVE);
-    let unit = |p: DVec2| (p - lo) / scale;
-    let values: Vec<f64> = samples.values().iter().map(|s| s / scale).collect();
-    let clamp = params.clamp.map(|c| c / scale);
-    let circles: Vec<Circle> = samples
-        .positions()
-        .iter()
-        .zip(&values)
-        .map(|(&p, &s)| Circle {
-            center: unit(p),
-            radius: clamp.map_or(s.abs(), |c| s.abs().min(c)),
-        })
-        .collect();
-    let spacing = match samples.as_grid() {
-        Some(g) => g.spacing().min_element() / scale,
-        None => mean_nearest(&circles),
-    };
+    let UnitSquare {
+        lo,
+        scale,
+        values,
+        clamp,
+        circles,
+        spacing,
+        extent,
+    } = UnitSquare::new(samples, params);
     let band = match (samples.as_grid(), params.owner_band) {
         (Some(_), Some(b)) => b * spacing,
         _ => f64::INFINITY,
@@ -129,7 +119,6 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     let res = params
         .raster_resolution
         .unwrap_or(64 * (n.sqrt() / 16.0).ceil() as usize);
-    let extent = (hi - lo) / scale;
     let mut cloud = rfta_plane::initial_points(
         &circles,
         &values,
@@ -140,38 +129,9 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         extent.max_element(),
     );
     if cloud.points() < 2 {
-        let sign = if values.iter().all(|&v| v >= 0.0) {
-            Some("positive (outside)")
-        } else if values.iter().all(|&v| v < 0.0) {
-            Some("negative (inside)")
-        } else {
-            None
-        };
-        return Err(match sign {
-            Some(sign) => Error::NoSurface {
-                samples: samples.len(),
-                sign,
-            },
-            None => Error::TooFewPoints {
-                feasible: cloud.points(),
-                spheres: samples.len(),
-            },
-        });
+        return Err(no_points(samples.len(), &values, cloud.points()));
     }
-    // The solves' square: the unit box's centre, PLANE_BOX unit boxes wide, grown to hold every
-    // owner's circle (so no point can leave it).
-    let centre = extent / 2.0;
-    let reach = cloud
-        .circle
-        .iter()
-        .map(|&i| {
-            ((circles[i].center - centre).abs() + DVec2::splat(circles[i].radius)).max_element()
-        })
-        .fold(PLANE_BOX / 2.0, f64::max);
-    let domain = Domain {
-        min: centre - DVec2::splat(reach * 1.02),
-        side: 2.04 * reach,
-    };
+    let domain = solve_domain(&cloud, &circles, extent);
     let depth = params.spsr_depth.unwrap_or_else(|| {
         ((domain.side * CELLS_PER_SPACING / spacing).log2().ceil() as u32).clamp(4, 11)
     });
@@ -245,6 +205,92 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         points,
         report,
     })
+}
+
+/// The samples as circles in the unit square, normalized as the reference does: the longer side
+/// of the samples' box becomes 1.
+struct UnitSquare {
+    /// The box's lower corner and its longer side: `p = unit * scale + lo`.
+    lo: DVec2,
+    scale: f64,
+    /// The values, clamp and circles in the unit square.
+    values: Vec<f64>,
+    clamp: Option<f64>,
+    circles: Vec<Circle>,
+    /// The sample spacing there: the grid's smaller axis, or for scattered samples the mean
+    /// distance to the nearest other sample.
+    spacing: f64,
+    /// The box's size there.
+    extent: DVec2,
+}
+
+impl UnitSquare {
+    fn new(samples: &Samples2, params: &Params) -> Self {
+        let (lo, hi) = samples.bounds();
+        let scale = (hi - lo).max_element().max(f64::MIN_POSITIVE);
+        let unit = |p: DVec2| (p - lo) / scale;
+        let values: Vec<f64> = samples.values().iter().map(|s| s / scale).collect();
+        let clamp = params.clamp.map(|c| c / scale);
+        let circles: Vec<Circle> = samples
+            .positions()
+            .iter()
+            .zip(&values)
+            .map(|(&p, &s)| Circle {
+                center: unit(p),
+                radius: clamp.map_or(s.abs(), |c| s.abs().min(c)),
+            })
+            .collect();
+        let spacing = match samples.as_grid() {
+            Some(g) => g.spacing().min_element() / scale,
+            None => mean_nearest(&circles),
+        };
+        let extent = (hi - lo) / scale;
+        Self {
+            lo,
+            scale,
+            values,
+            clamp,
+            circles,
+            spacing,
+            extent,
+        }
+    }
+}
+
+/// The error for samples that give fewer than 2 tangency points: no surface when they are all of
+/// one sign, too few points otherwise.
+fn no_points(samples: usize, values: &[f64], feasible: usize) -> Error {
+    let sign = if values.iter().all(|&v| v >= 0.0) {
+        Some("positive (outside)")
+    } else if values.iter().all(|&v| v < 0.0) {
+        Some("negative (inside)")
+    } else {
+        None
+    };
+    match sign {
+        Some(sign) => Error::NoSurface { samples, sign },
+        None => Error::TooFewPoints {
+            feasible,
+            spheres: samples,
+        },
+    }
+}
+
+/// The solves' square: the unit box's centre, [`PLANE_BOX`] unit boxes wide, grown to hold every
+/// owner's circle (so no point can leave it).
+fn solve_domain(cloud: &rfta_plane::arcs::Owners, circles: &[Circle], extent: DVec2) -> Domain {
+    let centre = extent / 2.0;
+    let reach = cloud
+        .circle
+        .iter()
+        .map(|&i| {
+            ((circles[i].center - centre).abs() + DVec2::splat(circles[i].radius)).max_element()
+        })
+        .fold(PLANE_BOX / 2.0, f64::max);
+    Domain {
+        min: centre - DVec2::splat(reach * 1.02),
+        side: 2.04 * reach,
+    }
 }
 
 /// Refuses values that are not a signed distance, by the 3D check's rule
