@@ -374,65 +374,7 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
         iso,
         depth,
     };
-    let inside = |v: f64| v > iso;
-    // Leaves with a sign change among their corners, and the coarser leaves that share an edge
-    // or a face with them (their boundary may be cut by the finer leaf's corners).
-    let mut cand: Vec<(u32, u32)> = levels
-        .par_iter()
-        .flat_map(|level| {
-            let d = level.depth;
-            let vals = &values[d as usize];
-            (0..level.cells.len())
-                .into_par_iter()
-                .with_min_len(crate::solve::GRAIN)
-                .flat_map_iter(move |ci| {
-                    // The cell and at most the 18 coarser leaves beside its faces and edges.
-                    let mut out = [(0u32, 0u32); 19];
-                    let mut len = 0;
-                    let corners = &level.corners[ci];
-                    let cut = !level.refined[ci] && {
-                        let first = inside(vals[corners[0] as usize]);
-                        corners.iter().any(|&k| inside(vals[k as usize]) != first)
-                    };
-                    if !cut {
-                        return out.into_iter().take(len);
-                    }
-                    out[len] = (d, ci as u32);
-                    len += 1;
-                    let c = crate::keys::demorton(level.cells[ci]);
-                    let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
-                    let n = 1i64 << d;
-                    for o in 0..27 {
-                        let off = [
-                            (o % 3) as i64 - 1,
-                            ((o / 3) % 3) as i64 - 1,
-                            (o / 9) as i64 - 1,
-                        ];
-                        let nz = off.iter().filter(|&&v| v != 0).count();
-                        if nz == 0 || nz == 3 {
-                            continue;
-                        }
-                        let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
-                        if k.iter().any(|&v| v < 0 || v >= n) || level.cell(k).is_some() {
-                            continue;
-                        }
-                        let mut dd = d;
-                        while dd > 0 {
-                            dd -= 1;
-                            k = k.map(|v| v >> 1);
-                            if let Some(i) = levels[dd as usize].cell(k) {
-                                out[len] = (dd, i);
-                                len += 1;
-                                break;
-                            }
-                        }
-                    }
-                    out.into_iter().take(len)
-                })
-        })
-        .collect();
-    cand.par_sort_unstable();
-    cand.dedup();
+    let cand = cut_leaves(levels, values, iso);
 
     // Leaves vary in work (most hold one small loop, a few several): tasks of at most
     // `LEAVES_PER_TASK` keep both threads busy to the end. Each task gathers its leaves' output
@@ -502,6 +444,70 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
         faces,
         broken_leaves,
     }
+}
+
+/// The leaves to extract, as (depth, cell) sorted and once each: those with a sign change among
+/// their corners, and the coarser leaves that share an edge or a face with them (their boundary
+/// may be cut by the finer leaf's corners).
+fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Vec<(u32, u32)> {
+    let inside = |v: f64| v > iso;
+    let mut cand: Vec<(u32, u32)> = levels
+        .par_iter()
+        .flat_map(|level| {
+            let d = level.depth;
+            let vals = &values[d as usize];
+            (0..level.cells.len())
+                .into_par_iter()
+                .with_min_len(crate::solve::GRAIN)
+                .flat_map_iter(move |ci| {
+                    // The cell and at most the 18 coarser leaves beside its faces and edges.
+                    let mut out = [(0u32, 0u32); 19];
+                    let mut len = 0;
+                    let corners = &level.corners[ci];
+                    let cut = !level.refined[ci] && {
+                        let first = inside(vals[corners[0] as usize]);
+                        corners.iter().any(|&k| inside(vals[k as usize]) != first)
+                    };
+                    if !cut {
+                        return out.into_iter().take(len);
+                    }
+                    out[len] = (d, ci as u32);
+                    len += 1;
+                    let c = crate::keys::demorton(level.cells[ci]);
+                    let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+                    let n = 1i64 << d;
+                    for o in 0..27 {
+                        let off = [
+                            (o % 3) as i64 - 1,
+                            ((o / 3) % 3) as i64 - 1,
+                            (o / 9) as i64 - 1,
+                        ];
+                        let nz = off.iter().filter(|&&v| v != 0).count();
+                        if nz == 0 || nz == 3 {
+                            continue;
+                        }
+                        let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
+                        if k.iter().any(|&v| v < 0 || v >= n) || level.cell(k).is_some() {
+                            continue;
+                        }
+                        let mut dd = d;
+                        while dd > 0 {
+                            dd -= 1;
+                            k = k.map(|v| v >> 1);
+                            if let Some(i) = levels[dd as usize].cell(k) {
+                                out[len] = (dd, i);
+                                len += 1;
+                                break;
+                            }
+                        }
+                    }
+                    out.into_iter().take(len)
+                })
+        })
+        .collect();
+    cand.par_sort_unstable();
+    cand.dedup();
+    cand
 }
 
 impl Ctx<'_> {
