@@ -111,7 +111,7 @@ pub(crate) fn reconstruct(
         json["faces"] = out.curve.edges.len().into();
         json["components"] = out.curve.loops().into();
         json["watertight"] = out.curve.is_closed().into();
-        crate::reconstruct::write_json(path, &json)?;
+        crate::ui::write_json(path, &json)?;
     }
     if let Some(path) = extras.points {
         let (p, n): (Vec<_>, Vec<_>) = out
@@ -185,9 +185,8 @@ pub(crate) fn demo(output: &Path, res: usize, params: &Params, ui: &Ui) -> Resul
     let out = rfta::plane::reconstruct(&samples, params)?;
     let seconds = t.elapsed().as_secs_f64();
     let ms = rfta_mc::marching_squares(&grid, &values, 0.0);
-    let err = |c: &Polylines| {
-        crate::reconstruct::mean_and_max(c.vertices.iter().map(|&v| demo_shape(v).abs()))
-    };
+    let err =
+        |c: &Polylines| crate::ui::mean_and_max(c.vertices.iter().map(|&v| demo_shape(v).abs()));
     let (rm, rx) = err(&out.curve);
     let (mm, mx) = err(&ms);
     let line = format!(

@@ -396,16 +396,7 @@ fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result
     json["vertices"] = out.mesh.n_vertices().into();
     json["faces"] = out.mesh.n_faces().into();
     json["seconds"] = seconds.into();
-    write_json(path, &json)
-}
-
-/// A `--report` file: one JSON object, written atomically.
-pub(crate) fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
-    rfta_io::write_atomic(path, |w| {
-        serde_json::to_writer_pretty(&mut *w, json)?;
-        writeln!(w)
-    })?;
-    Ok(())
+    crate::ui::write_json(path, &json)
 }
 
 /// The input describes no surface: an empty mesh is written, and the reason returned as
@@ -425,14 +416,6 @@ fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
     rfta_io::write_mesh(path, mesh)?;
     ui.say(format!("wrote {}", path.display()));
     Ok(())
-}
-
-/// Mean and largest of the demos' vertex errors (0 for none).
-pub(crate) fn mean_and_max(errors: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (sum, max, n) = errors.fold((0.0, 0.0f64, 0usize), |(s, m, n), d| {
-        (s + d, m.max(d), n + 1)
-    });
-    (sum / n.max(1) as f64, max)
 }
 
 /// Two tori side by side, overlapping: genus 2. The minimum of their exact signed distances is
@@ -496,7 +479,7 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
     let out = run_pipeline(&samples, &params, ui)?;
     describe(&out, ui, t.elapsed().as_secs_f64());
     let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
-    let err = |m: &TriMesh| mean_and_max(m.vertices.iter().map(|&v| two_tori(v).abs()));
+    let err = |m: &TriMesh| crate::ui::mean_and_max(m.vertices.iter().map(|&v| two_tori(v).abs()));
     let (rm, rx) = err(&out.mesh);
     let (mm, mx) = err(&mc);
     let genus = rfta_mesh::Topology::of(&out.mesh).genus();

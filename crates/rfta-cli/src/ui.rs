@@ -263,3 +263,20 @@ fn parse_finite(s: &str, zero: bool) -> Result<f64, String> {
         )),
     }
 }
+
+/// A `--report` file: one JSON object, written atomically.
+pub(crate) fn write_json(path: &std::path::Path, json: &serde_json::Value) -> anyhow::Result<()> {
+    rfta_io::write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, json)?;
+        writeln!(w)
+    })?;
+    Ok(())
+}
+
+/// Mean and largest of the demos' vertex errors (0 for none).
+pub(crate) fn mean_and_max(errors: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (sum, max, n) = errors.fold((0.0, 0.0f64, 0usize), |(s, m, n), d| {
+        (s + d, m.max(d), n + 1)
+    });
+    (sum / n.max(1) as f64, max)
+}

@@ -5,6 +5,7 @@ Run: pip install crates/rfta-py[test] && pytest crates/rfta-py/tests
 """
 
 import inspect
+import json
 import os
 import signal
 import subprocess
@@ -100,15 +101,30 @@ def test_same_mesh_as_the_cli(tmp_path):
     S = torus_sdf(grid(16))
     np.save(tmp_path / "torus.npy", S)
     out = tmp_path / "torus.obj"
+    report = tmp_path / "report.json"
     subprocess.run(
         [exe, "-q", "reconstruct", str(tmp_path / "torus.npy"), "-o", str(out),
-         "--bounds=-1,1", "--seed", "7", "--iters", "4"],
+         "--bounds=-1,1", "--seed", "7", "--rounds", "4", "--max-points-per-sphere", "2",
+         "--report", str(report)],
         check=True,
     )
     V, F = read_obj(out)
-    r = rfta.reconstruct(S, bounds=(-1, 1), seed=7, rounds=4)
+    r = rfta.reconstruct(S, bounds=(-1, 1), seed=7, rounds=4, max_points_per_sphere=2)
     assert np.array_equal(r.vertices, V)
     assert np.array_equal(r.faces, F)
+    # One definition of the report (rfta::Report's serde form): the same figures by the same
+    # names, the CLI adding the mesh's size and its seconds, Python whether it was a grid.
+    cli = json.loads(report.read_text())
+    assert set(cli) - {"vertices", "faces", "seconds"} == set(r.report) - {"grid"}
+    for key in ["samples", "components", "sign_errors", "entered", "cavities", "points_per_round"]:
+        assert cli[key] == r.report[key], key
+    assert cli["timings"].keys() == r.report["timings"].keys()
+
+
+def test_a_wrong_setting_is_refused_by_name():
+    S = torus_sdf(grid(8))
+    with pytest.raises(ValueError, match="rounds"):
+        rfta.reconstruct(S, bounds=(-1, 1), rounds=2.5)
 
 
 def test_a_known_genus_cuts_the_torus_and_the_report_says_so():

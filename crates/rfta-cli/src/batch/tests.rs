@@ -1,3 +1,5 @@
+//! Tests of `rfta batch`: shards, the arguments and figures of each row, bad row columns.
+
 use super::*;
 
 #[test]

@@ -1,3 +1,5 @@
+//! Tests of the solver: refinement around seeds, restriction, evaluation against every hat.
+
 use super::*;
 use crate::{OrientedPoints, tree};
 
