@@ -7,7 +7,7 @@ use crate::{Params, RASTER_REACH};
 
 /// The samples moved into the unit box as the reference does (subtract the per-axis minimum,
 /// divide by the largest extent), as spheres of radius `|s|` (times the noise shrink
-/// [`crate::Report::radius_scale`]) capped at the clamp.
+/// [`crate::InputReport::radius_scale`]) capped at the clamp.
 pub(crate) struct UnitBox {
     trans: DVec3,
     scale: f64,
@@ -23,7 +23,7 @@ pub(crate) struct UnitBox {
     pub(crate) input_spacing: f64,
     /// The samples' grid in the unit box, when they lie on one.
     grid: Option<Grid>,
-    /// The noise shrink of the radii ([`crate::Report::radius_scale`]; 1: none).
+    /// The noise shrink of the radii ([`crate::InputReport::radius_scale`]; 1: none).
     shrink: f64,
 }
 

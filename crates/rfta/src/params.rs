@@ -252,7 +252,7 @@ impl Params {
     /// The tangency-point settings for `n` samples, where spheres of radius `owner_radius` and
     /// larger own no point (unit box; clamped or beyond [`Params::owner_band`]) and a sphere's own
     /// points lie at `owner_scale` times its radius (1; above 1 for spheres shrunk by noise,
-    /// [`crate::Report::radius_scale`]).
+    /// [`crate::InputReport::radius_scale`]).
     pub fn feasible_params(
         &self,
         n: usize,
