@@ -127,6 +127,12 @@ pub(crate) struct Tuning {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     genus: Option<usize>,
+    /// Keep the cavities the surface seals around outside samples where the grid leaves them
+    /// open (a gap or a hole closed); by default they are opened. Voids walled in by inside
+    /// samples are kept either way.
+    #[arg(long)]
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    keep_cavities: bool,
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
     /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
     /// samples always do).
@@ -171,10 +177,12 @@ impl Tuning {
         ];
         for (name, value) in self.options() {
             a.push(format!("--{}", name.replace('_', "-")));
-            a.push(match value {
-                serde_json::Value::String(s) => s,
-                v => v.to_string(),
-            });
+            match value {
+                // A flag (serialized only when given).
+                serde_json::Value::Bool(_) => {}
+                serde_json::Value::String(s) => a.push(s),
+                v => a.push(v.to_string()),
+            }
         }
         a
     }
@@ -260,6 +268,13 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
         ui.detail(format!(
             "split {} faces that cut a small sample sphere with the sample on the wrong side, and dented them past it",
             r.repair.dents
+        ));
+    }
+    if r.repair.cavities_opened > 0 {
+        ui.detail(format!(
+            "opened {} cavit{} the surface had sealed around outside samples (a gap or a hole the samples leave open)",
+            r.repair.cavities_opened,
+            if r.repair.cavities_opened == 1 { "y" } else { "ies" }
         ));
     }
     if r.repair.components_joined + r.repair.handles_cut > 0 {

@@ -15,7 +15,8 @@
 //! - [`MeshIndex::signed_distance`]: the unsigned distance, negative where the winding number
 //!   exceeds 1/2 (libigl's convention), so it works on meshes with small holes too.
 //! - [`sample_surface`]: area-weighted random points with a seed.
-//! - [`Topology`]: watertight, manifold, oriented, Euler characteristic, genus, components.
+//! - [`Topology`]: watertight, manifold, oriented, Euler characteristic, genus, components;
+//!   [`face_components`], their [`signed_volume`], the inward ones ([`cavities`]).
 //! - [`short_loops`]: the handles a short loop goes around (thinner than a sampling resolves);
 //!   [`cut_along`] such a loop, [`join`] two components by a tube.
 //!
@@ -38,6 +39,7 @@
 
 mod build;
 mod bvh;
+mod components;
 mod loops;
 mod sample;
 mod surgery;
@@ -46,6 +48,7 @@ mod union_find;
 mod winding;
 
 pub use bvh::{ClosestPoint, MeshIndex, Shell};
+pub use components::{cavities, face_components, signed_volume};
 pub use loops::{ShortLoops, short_loops};
 pub use rfta_geom::TriMesh;
 pub use sample::{SurfaceSample, sample_surface};

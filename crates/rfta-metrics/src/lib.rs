@@ -124,6 +124,8 @@ pub struct MeshSummary {
     pub genus: Option<i64>,
     /// Connected components.
     pub components: usize,
+    /// Components that face inward: cavities ([`rfta_mesh::cavities`]).
+    pub cavities: usize,
     /// Edges with one face.
     pub boundary_edges: usize,
 }
@@ -138,6 +140,7 @@ impl MeshSummary {
             watertight: t.is_watertight(),
             genus: t.genus(),
             components: t.components,
+            cavities: rfta_mesh::cavities(mesh).len(),
             boundary_edges: t.boundary_edges,
         }
     }

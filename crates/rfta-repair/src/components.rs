@@ -1,28 +1,8 @@
-//! Connected components of a mesh (faces sharing a vertex): which they are, their volumes, and
-//! their removal by the caller's verdict.
+//! Connected components of a mesh (faces sharing a vertex, `rfta_mesh::face_components`) removed
+//! by the caller's verdict.
 
 use rfta_geom::{Aabb, TriMesh};
-
-/// The faces of each connected component (faces sharing a vertex), components in the order of
-/// their first face.
-pub fn face_components(mesh: &TriMesh) -> Vec<Vec<usize>> {
-    let mut sets = rfta_mesh::UnionFind::new(mesh.vertices.len());
-    for f in &mesh.faces {
-        sets.union(f[0] as usize, f[1] as usize);
-        sets.union(f[0] as usize, f[2] as usize);
-    }
-    let mut index_of = std::collections::HashMap::new();
-    let mut parts: Vec<Vec<usize>> = Vec::new();
-    for (i, f) in mesh.faces.iter().enumerate() {
-        let root = sets.find(f[0] as usize);
-        let k = *index_of.entry(root).or_insert_with(|| {
-            parts.push(Vec::new());
-            parts.len() - 1
-        });
-        parts[k].push(i);
-    }
-    parts
-}
+use rfta_mesh::face_components;
 
 /// Why a component of the mesh goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,18 +15,6 @@ pub enum Island {
     /// inside a sample sphere and no sample of its inside's sign enclosed, or an inward shell with
     /// no other component around it).
     Unsupported,
-}
-
-/// The divergence theorem over some faces (`TriMesh::signed_volume` of a part): negative for a
-/// closed component that faces inward, a cavity.
-pub fn signed_volume(mesh: &TriMesh, faces: &[usize]) -> f64 {
-    faces
-        .iter()
-        .map(|&f| {
-            let [a, b, c] = mesh.triangle(f);
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum()
 }
 
 /// Removes the connected components (by shared vertices) that `unsupported` condemns (given their

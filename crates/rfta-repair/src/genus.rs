@@ -4,7 +4,7 @@
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
-use crate::components::face_components;
+use rfta_mesh::face_components;
 
 /// How far apart the two sides of a cut handle move, in sample spacings.
 const CUT_GAP: f64 = 0.05;

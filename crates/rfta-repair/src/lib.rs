@@ -10,6 +10,9 @@
 //!   cut a sphere no vertex is in.
 //! - [`to_genus`]: a known genus reached, components joined by tubes and the shortest handle
 //!   loops cut ([`rfta_mesh::join`], [`rfta_mesh::cut_along`]).
+//! - [`cavity_openings`]: where a cavity's wall is one the samples leave undecided (outside
+//!   samples on both sides, next to each other on the grid): points for the caller to keep
+//!   outside, so that a gap or a hole the surface closed opens again.
 //! - [`edit`]: the edits all of these are made of, none of which turns a face over.
 //!
 //! Spheres come as [`Spheres`]: their centres and radii in a frame of their own (the pipeline's
@@ -29,6 +32,7 @@
 //! assert!(mesh.vertices.iter().all(|v| v.distance(spheres[0].center) > 0.3 - 0.001 - 1e-9));
 //! ```
 
+mod cavities;
 mod clear;
 mod components;
 mod dent;
@@ -38,14 +42,16 @@ mod genus;
 use rfta_geom::Sphere;
 use rfta_geom::glam::DVec3;
 
+pub use cavities::{GAP_POINTS, Openings, cavity_openings};
 pub use clear::{
     CLEAR_BELOW, CLEAR_REACH, CLEAR_ROUNDS, PUSH_DEPTH, PUSH_PASSES, clear_spheres,
     push_out_of_spheres,
 };
-pub use components::{Island, face_components, remove_islands, signed_volume};
+pub use components::{Island, remove_islands};
 pub use dent::{DENT_BELOW, DENT_MARGIN, dent_wrong_side};
 pub use edit::apply_moves;
 pub use genus::to_genus;
+pub use rfta_mesh::{face_components, signed_volume};
 
 /// The map from a mesh's coordinates into the spheres' frame: `(p - origin) / scale`.
 #[derive(Debug, Clone, Copy, PartialEq)]

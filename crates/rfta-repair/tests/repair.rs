@@ -239,3 +239,96 @@ fn edits_keep_the_surface() {
     });
     assert!(normals_ok);
 }
+
+/// An axis-aligned box from `lo` to `hi`, outward, or inward (a cavity's wall) when `inward`.
+fn boxed(lo: DVec3, hi: DVec3, inward: bool) -> TriMesh {
+    let mut mesh = shapes::cuboid((hi - lo) / 2.0);
+    mesh.map_vertices(|p| p + (lo + hi) / 2.0);
+    if inward {
+        for f in &mut mesh.faces {
+            f.swap(1, 2);
+        }
+    }
+    mesh
+}
+
+/// A grid of 10^3 points 0.1 apart from 0.05 to 0.95, each a sphere of radius 0.01 with the value
+/// `value(p)` (frame = the mesh's coordinates).
+fn grid_samples(value: impl Fn(DVec3) -> f64) -> (rfta_geom::Grid, Vec<Sphere>, Vec<f64>) {
+    let grid =
+        rfta_geom::Grid::new([10, 10, 10], DVec3::splat(0.05), DVec3::splat(0.1)).expect("grid");
+    let centres: Vec<DVec3> = (0..grid.len()).map(|i| grid.position(i)).collect();
+    let spheres = centres.iter().map(|&c| Sphere::new(c, 0.01)).collect();
+    let values = centres.iter().map(|&c| value(c)).collect();
+    (grid, spheres, values)
+}
+
+/// A solid box from 0.2 to `outer_x` along x (0.8 along y and z) with a cavity from 0.32 to 0.66
+/// along x (0.68 along y and z): the samples are outside beyond the box and in the cavity, inside
+/// in the walls.
+fn hollow_box(outer_x: f64) -> (TriMesh, impl Fn(DVec3) -> f64) {
+    let outer_hi = DVec3::new(outer_x, 0.8, 0.8);
+    let (cav_lo, cav_hi) = (DVec3::splat(0.32), DVec3::new(0.66, 0.68, 0.68));
+    let mut mesh = boxed(DVec3::splat(0.2), outer_hi, false);
+    mesh.append(&boxed(cav_lo, cav_hi, true));
+    let inside = move |p: DVec3, lo: DVec3, hi: DVec3| p.cmpgt(lo).all() && p.cmplt(hi).all();
+    let value = move |p: DVec3| {
+        if !inside(p, DVec3::splat(0.2), outer_hi) || inside(p, cav_lo, cav_hi) {
+            0.05
+        } else {
+            -0.05
+        }
+    };
+    (mesh, value)
+}
+
+/// A wall thinner than a spacing, with no sample in it, between outside samples in the cavity and
+/// outside samples beyond the box: the cavity opens there, on the 4 x 4 grid edges that cross it,
+/// with points in the gaps between their spheres; a wall with inside samples in it all round (a
+/// hollow box) keeps its void; a mesh without a cavity has nothing to open.
+#[test]
+fn a_cavity_opens_through_a_wall_the_samples_leave_open_and_a_void_stays() {
+    // The +x wall runs from 0.66 to 0.70, between the grid's x = 0.65 and 0.75.
+    let (mesh, value) = hollow_box(0.70);
+    let (grid, spheres, values) = grid_samples(value);
+    let set = Spheres {
+        spheres: &spheres,
+        values: &values,
+        frame: Frame::IDENTITY,
+        spacing: 0.1,
+    };
+    let open = rfta_repair::cavity_openings(&mesh, &set, &grid);
+    assert_eq!((open.cavities, open.sealed), (1, 0));
+    assert_eq!(open.edges.len(), 16, "{:?}", open.edges);
+    for &[i, j] in &open.edges {
+        let (a, b) = (grid.position(i), grid.position(j));
+        assert!(
+            (a.x - 0.65).abs() < 1e-9 && (b.x - 0.75).abs() < 1e-9,
+            "{a} {b}"
+        );
+        assert_eq!((a.y, a.z), (b.y, b.z));
+    }
+    assert_eq!(open.points.len(), 16 * rfta_repair::GAP_POINTS.len());
+    // Spread over the gap between the spheres: x from 0.66 to 0.74.
+    assert!(
+        open.points.iter().all(|p| p.x > 0.66 && p.x < 0.74),
+        "{:?}",
+        open.points
+    );
+
+    // The same cavity with a wall 0.24 thick on that side, holding inside samples: a void.
+    let (mesh, value) = hollow_box(0.90);
+    let (grid, spheres, values) = grid_samples(value);
+    let set = Spheres {
+        spheres: &spheres,
+        values: &values,
+        ..set
+    };
+    let void = rfta_repair::cavity_openings(&mesh, &set, &grid);
+    assert_eq!((void.cavities, void.sealed), (1, 1));
+    assert!(void.edges.is_empty() && void.points.is_empty());
+
+    let solid = boxed(DVec3::splat(0.2), DVec3::splat(0.8), false);
+    let none = rfta_repair::cavity_openings(&solid, &set, &grid);
+    assert_eq!(none, rfta_repair::Openings::default());
+}

@@ -93,6 +93,13 @@ pub struct Params {
     /// not added. `None` (the default): the topology is the reconstruction's; handles thinner
     /// than the samples resolve are reported ([`crate::Consistency::thin_loops`]).
     pub genus: Option<usize>,
+    /// Keep the cavities a grid's samples leave open instead of opening them. By default a
+    /// cavity the surface seals around outside samples, where an outside sample in it is next to
+    /// an outside sample beyond the surface on the grid (a gap or a hole the surface closed: the
+    /// wall between them holds no inside sample), is opened: the final solve is run again with a
+    /// point in each such gap kept outside ([`rfta_repair::cavity_openings`]). A cavity walled in
+    /// by inside samples all round (a hollow ball) is kept either way. Scattered samples: kept.
+    pub keep_cavities: bool,
 }
 
 impl Default for Params {
@@ -117,6 +124,7 @@ impl Default for Params {
             owner_band: Some(OWNER_BAND),
             min_island: 2.0,
             genus: None,
+            keep_cavities: false,
         }
     }
 }

@@ -56,6 +56,8 @@ pub enum Step {
     SpheresCleared,
     /// A known genus reached.
     Topology,
+    /// Cavities the samples leave open opened (a final solve and a repair again).
+    Cavities,
     /// The mesh check and the consistency check.
     Consistency,
 }
@@ -72,6 +74,7 @@ impl std::fmt::Display for Step {
             Step::Components => write!(f, "components judged"),
             Step::SpheresCleared => write!(f, "spheres cleared"),
             Step::Topology => write!(f, "topology"),
+            Step::Cavities => write!(f, "cavities opened"),
             Step::Consistency => write!(f, "consistency check"),
         }
     }
@@ -230,9 +233,14 @@ pub struct RepairReport {
     /// [`crate::Params::genus`] (0 without it).
     pub handles_cut: usize,
     /// Closed components of the output that face inward: cavities in the solid, each around
-    /// samples outside the shape (the island rule keeps no other). Unless the shape is hollow
-    /// there, a hole or a gap the surface closed; a warning says so.
+    /// samples outside the shape (the island rule keeps no other). Unless
+    /// [`crate::Params::keep_cavities`], those left are walled in by inside samples (a void the
+    /// samples show) or could not be opened; a warning says which.
     pub cavities: usize,
+    /// Cavities opened: the surface had closed a gap or a hole around outside samples that the
+    /// grid connects to the outside through outside samples only
+    /// ([`rfta_repair::cavity_openings`]).
+    pub cavities_opened: usize,
 }
 
 /// What happened when, across the stages: the warnings and each step's time, in order (a
@@ -309,6 +317,7 @@ mod tests {
             (Step::Components, "components judged"),
             (Step::SpheresCleared, "spheres cleared"),
             (Step::Topology, "topology"),
+            (Step::Cavities, "cavities opened"),
             (Step::Consistency, "consistency check"),
         ];
         for (step, name) in steps {
@@ -354,9 +363,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 5 + 3 + 3 + 8 fields, the mesh check's 6, the consistency check's 6
+        // The stages' 4 + 5 + 3 + 3 + 9 fields, the mesh check's 6, the consistency check's 6
         // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 5 + 3 + 3 + 8 + 6 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 5 + 3 + 3 + 9 + 6 + 6 + 2, "{text}");
     }
 
     #[test]

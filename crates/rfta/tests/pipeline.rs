@@ -676,9 +676,69 @@ fn a_cavity_is_counted_and_warned_about() {
         "{:?}",
         hollow.report.warnings
     );
+    // Walled in by inside samples all round: a void, kept and named as one.
+    assert_eq!(hollow.report.repair.cavities_opened, 0);
+    assert!(
+        hollow
+            .report
+            .warnings
+            .iter()
+            .any(|w| w.contains("walled in")),
+        "{:?}",
+        hollow.report.warnings
+    );
     let solid = reconstruct(&sdf(false), &Params::default()).expect("reconstruct");
     assert_eq!(solid.report.repair.cavities, 0);
     assert!(solid.report.warnings.iter().all(|w| !w.contains("cavit")));
+}
+
+/// Two blocks 0.08 apart (0.8 spacings), the grid's samples in the gap outside: the surface
+/// closes the gap around them and keeps a sealed cavity (as before, with `keep_cavities`); by
+/// default the cavity is opened, with every sample on its side. A plain ball opens nothing and
+/// comes out the same either way.
+#[test]
+fn a_gap_the_surface_closes_is_opened_and_nothing_else_changes() {
+    let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+    let block = |p: DVec3, c: f64| {
+        let q = (p - DVec3::new(c, 0.0, 0.0)).abs() - DVec3::new(0.35, 0.5, 0.5);
+        q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
+    };
+    let values = (0..grid.len())
+        .map(|i| {
+            let p = grid.position(i);
+            block(p, -0.39).min(block(p, 0.39))
+        })
+        .collect();
+    let gap = SdfSamples::grid(grid, values).expect("samples");
+    let keep = Params {
+        keep_cavities: true,
+        ..Params::default()
+    };
+    let sealed = reconstruct(&gap, &keep).expect("reconstruct");
+    assert!(
+        sealed.report.repair.cavities >= 1,
+        "{:?}",
+        sealed.report.repair
+    );
+    let opened = reconstruct(&gap, &Params::default()).expect("reconstruct");
+    assert_eq!(
+        opened.report.repair.cavities, 0,
+        "{:?}",
+        opened.report.repair
+    );
+    assert_eq!(
+        opened.report.repair.cavities_opened,
+        sealed.report.repair.cavities
+    );
+    assert_eq!(opened.report.consistency.sign_errors, 0);
+    assert!(opened.report.mesh.watertight);
+
+    let ball = grid_samples(Analytic::Sphere { radius: 0.6 }, 20);
+    let a = reconstruct(&ball, &Params::default()).expect("reconstruct");
+    let b = reconstruct(&ball, &keep).expect("reconstruct");
+    assert_eq!(a.report.repair.cavities_opened, 0);
+    assert_eq!(a.mesh.vertices, b.mesh.vertices);
+    assert_eq!(a.mesh.faces, b.mesh.faces);
 }
 
 /// The same torus at any scale: a grid 2^200 or 2^-200 times as large gives the unit-scale mesh

@@ -59,13 +59,17 @@ pub(crate) struct Row {
     pub(crate) genus: Option<i64>,
     pub(crate) gt_genus: Option<i64>,
     pub(crate) components: usize,
+    /// Components facing inward (`rfta_mesh::cavities`), and the ground truth's.
+    pub(crate) cavities: usize,
+    pub(crate) gt_cavities: usize,
     /// Agreement with every input sample (`rfta::consistency`); `None` when the method failed.
     pub(crate) consistency: Option<rfta::Consistency>,
     pub(crate) status: String,
 }
 
 /// Overrides of the rfta methods' parameters by `rfta::Params`' serde names (`--depth D`,
-/// `--owner-band K`, `--raster-resolution R`), for the tables of docs/speed.md.
+/// `--owner-band K`, `--raster-resolution R`, `--keep-cavities`), for the tables of docs/speed.md
+/// and docs/faithfulness.md.
 type Tuning = serde_json::Map<String, serde_json::Value>;
 
 struct Args {
@@ -142,6 +146,9 @@ fn parse(args: &[String]) -> Result<Args> {
                     serde_json::Value::from(number)
                 };
                 a.tuning.insert(name, value);
+            }
+            "--keep-cavities" => {
+                a.tuning.insert("keep_cavities".into(), true.into());
             }
             "--quick" => a.quick = true,
             "--scenario" => {
@@ -287,6 +294,8 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                     genus: None,
                     gt_genus: None,
                     components: 0,
+                    cavities: 0,
+                    gt_cavities: 0,
                     consistency: None,
                     status,
                 });
@@ -345,6 +354,8 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                             genus: s.genus,
                             gt_genus: gt_summary.genus,
                             components: s.components,
+                            cavities: s.cavities,
+                            gt_cavities: gt_summary.cavities,
                             consistency: Some(consistency),
                             status: "ok".into(),
                         }
@@ -440,6 +451,8 @@ fn failed_row(
         genus: None,
         gt_genus,
         components: 0,
+        cavities: 0,
+        gt_cavities: 0,
         consistency: None,
         status: why,
     }

@@ -85,7 +85,7 @@ fn reference_method(m: &str) -> String {
 
 pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,sign_errors,entered,gaps,deepest_entry,thin_loops,status\n",
+        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,cavities,gt_cavities,sign_errors,entered,gaps,deepest_entry,thin_loops,status\n",
     );
     for r in rows {
         let g = |v: Option<i64>| v.map(|g| g.to_string()).unwrap_or_default();
@@ -93,7 +93,7 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             |f: fn(&rfta::Consistency) -> String| r.consistency.as_ref().map(f).unwrap_or_default();
         writeln!(
             s,
-            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.shape,
             r.n,
             r.method,
@@ -106,6 +106,8 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             g(r.genus),
             g(r.gt_genus),
             r.components,
+            r.cavities,
+            r.gt_cavities,
             c(|c| c.sign_errors.to_string()),
             c(|c| c.entered.to_string()),
             c(|c| c.gaps.to_string()),
@@ -302,9 +304,12 @@ pub(crate) fn write_markdown(
     writeln!(s, "\n## Per shape\n")?;
     writeln!(
         s,
-        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | wrong side / entered / thin loops | status |"
+        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | cavities (GT) | wrong side / entered / thin loops | status |"
     )?;
-    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+    writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    )?;
     for r in rows {
         let refc = reference
             .get(&(r.shape.clone(), r.n, reference_method(&r.method)))
@@ -317,7 +322,7 @@ pub(crate) fn write_markdown(
             .unwrap_or_else(|| "-".into());
         writeln!(
             s,
-            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} | {} |",
+            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} ({}) | {} | {} |",
             r.shape,
             r.n,
             r.method,
@@ -327,6 +332,8 @@ pub(crate) fn write_markdown(
             r.e_sdf,
             r.watertight,
             r.components,
+            r.cavities,
+            r.gt_cavities,
             r.consistency
                 .as_ref()
                 .map(|c| format!("{} / {} / {}", c.sign_errors, c.entered, c.thin_loops.len()))
@@ -353,14 +360,14 @@ fn write_consistency(
     writeln!(s, "## Agreement with the samples and the topology\n")?;
     writeln!(
         s,
-        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; independent loops around handles shorter than {:.2} h, thin handles the samples can neither confirm nor rule out (total, and the shapes with any); the shapes whose output has the ground truth's genus and one component. The reference rows give the last column for the shared data's results on the same shapes (the other columns were not measured for them).\n",
+        "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; independent loops around handles shorter than {:.2} h, thin handles the samples can neither confirm nor rule out (total, and the shapes with any); cavities the ground truth lacks (inward-facing components beyond its own; total, and the shapes with any); the shapes whose output has the ground truth's genus and one component. The reference rows give the last column for the shared data's results on the same shapes (the other columns were not measured for them).\n",
         rfta::consistency::SIGN_MARGIN,
         rfta::consistency::ENTER_MARGIN,
         rfta::consistency::THIN_LOOP
     )?;
     writeln!(
         s,
-        "| N | method | shapes | wrong side (shapes) | entered (shapes) | worst entered % | thin loops (shapes) | right genus, one component |\n|---|---|---|---|---|---|---|---|"
+        "| N | method | shapes | wrong side (shapes) | entered (shapes) | worst entered % | thin loops (shapes) | extra cavities (shapes) | right genus, one component |\n|---|---|---|---|---|---|---|---|---|"
     )?;
     for &n in res {
         for m in methods {
@@ -382,13 +389,16 @@ fn write_consistency(
                 .iter()
                 .filter(|(_, c)| !c.thin_loops.is_empty())
                 .count();
+            let extra = |r: &Row| r.cavities.saturating_sub(r.gt_cavities);
+            let cavities: usize = done.iter().map(|(r, _)| extra(r)).sum();
+            let cavity_shapes = done.iter().filter(|(r, _)| extra(r) > 0).count();
             let right = done
                 .iter()
                 .filter(|(r, _)| r.genus.is_some() && r.genus == r.gt_genus && r.components == 1)
                 .count();
             writeln!(
                 s,
-                "| {n} | {m} | {} of {} | {wrong} ({wrong_shapes}) | {entered} ({entered_shapes}) | {worst:.2} | {thin} ({thin_shapes}) | {right} |",
+                "| {n} | {m} | {} of {} | {wrong} ({wrong_shapes}) | {entered} ({entered_shapes}) | {worst:.2} | {thin} ({thin_shapes}) | {cavities} ({cavity_shapes}) | {right} |",
                 done.len(),
                 sel.len()
             )?;

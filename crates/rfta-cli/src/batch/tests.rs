@@ -80,6 +80,7 @@ fn every_reconstruct_option_reaches_the_rows() {
         "7",
         "--genus",
         "0",
+        "--keep-cavities",
     ])
     .expect("options");
     let mut given: Vec<String> = cli.args.checks.to_args(None);

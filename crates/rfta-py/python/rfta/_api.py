@@ -153,6 +153,7 @@ def reconstruct(
     raster_resolution: Optional[int] = None,
     min_island: Optional[float] = None,
     genus: Optional[int] = None,
+    keep_cavities: bool = False,
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
     verbose: bool = False,
@@ -172,7 +173,7 @@ def reconstruct(
     points : (n, 3) array, optional
         Scattered sample positions (``S`` then has shape (n,)).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
-    raster_resolution, min_island, genus, threads
+    raster_resolution, min_island, genus, keep_cavities, threads
         ``rfta::Params``' settings of these names (its serde form, the one table of names).
         ``rfta reconstruct``'s options (``rfta reconstruct --help``) are the same with dashes
         (``--max-points-per-sphere``, ``--owner-band``), except ``screening``, which has no
@@ -208,6 +209,7 @@ def reconstruct(
         raster_resolution=raster_resolution,
         min_island=min_island,
         genus=genus,
+        keep_cavities=keep_cavities,
         threads=threads,
     )
     V, F, P, N, report = _run(

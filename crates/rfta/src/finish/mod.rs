@@ -1,8 +1,10 @@
-//! Step 6, in three stages with one type between each: the final solve ([`final_solve`]: a
-//! [`Solved`] mesh in the samples' coordinates), repair ([`repair`]: components the samples
-//! contradict removed, samples on the wrong side dented past, sample spheres cleared, a known
-//! genus reached; the repaired mesh) and the verdict ([`verdict`]: the mesh checked, measured
-//! against every sample, and what the caller should know put in the report).
+//! Step 6, in stages with one type between each: the final solve ([`final_solve`]: a mesh in
+//! the samples' coordinates), repair ([`repair`]: components the samples contradict removed,
+//! samples on the wrong side dented past, sample spheres cleared, a known genus reached; the
+//! repaired mesh), the cavities the samples leave open opened ([`open_cavities`]: solved and
+//! repaired again with points kept outside in their walls) and the verdict ([`verdict`]: the
+//! mesh checked, measured against every sample, and what the caller should know put in the
+//! report).
 //!
 //! The repair steps are `rfta-repair`'s; `islands.rs` holds the verdicts it removes components
 //! by.
@@ -25,8 +27,8 @@ use crate::{Consistency, MeshCheck, Params, Report, Result, Stage, Step, check, 
 
 use islands::{inverted_and_unenclosed, judge};
 use rfta_repair::{
-    CLEAR_BELOW, Island, PUSH_DEPTH, clear_spheres, dent_wrong_side, face_components,
-    push_out_of_spheres, remove_islands, signed_volume, to_genus,
+    CLEAR_BELOW, Island, PUSH_DEPTH, clear_spheres, dent_wrong_side, push_out_of_spheres,
+    remove_islands, to_genus,
 };
 
 /// What the final solve and the repair hand back: the mesh and the final points in the input's
@@ -38,7 +40,8 @@ pub(crate) struct Finished {
     pub(crate) repair: RepairReport,
 }
 
-/// The last solve on the final points, then the repair.
+/// The last solve on the final points, then the repair; then, unless [`Params::keep_cavities`],
+/// the cavities the samples leave open opened ([`open_cavities`]).
 pub(crate) fn finish(
     samples: &SdfSamples,
     unit: &UnitBox,
@@ -48,40 +51,55 @@ pub(crate) fn finish(
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<Finished> {
     progress(Stage::Final);
-    let (solved, final_solve) = final_solve(unit, params, rounds, journal)?;
-    let (mesh, repair) = repair(samples, unit, params, &solved.tree, solved.mesh, journal);
+    let cloud = rounds.cloud;
+    // Every sample sphere's tree: the rounds' when they built one, else built on first use.
+    let tree = OnceLock::new();
+    if let Some(all) = rounds.all {
+        let _ = tree.set(all);
+    }
+    let (mesh, mut final_solve) = final_solve(unit, params, &cloud, &[], journal)?;
+    let (mut mesh, mut repair) = repair(samples, unit, params, &tree, mesh, journal);
+    if !params.keep_cavities
+        && repair.cavities > 0
+        && let Some(grid) = samples.as_grid()
+    {
+        let t = Instant::now();
+        let opened = open_cavities(samples, grid, unit, params, &cloud, &tree, mesh, repair)?;
+        (mesh, repair) = (opened.mesh, opened.repair);
+        if let Some(side_errors) = opened.side_errors {
+            final_solve.side_errors = side_errors;
+        }
+        journal.timed(Step::Cavities, t);
+    }
+    let points = TangentPoints {
+        points: cloud.points.iter().map(|&p| unit.to_input(p)).collect(),
+        normals: cloud.normals,
+        owners: cloud.owners,
+    };
     Ok(Finished {
         mesh,
-        points: solved.points,
+        points,
         final_solve,
         repair,
     })
 }
 
-/// What the final solve hands to repair.
-struct Solved {
-    /// The screened Poisson surface of the final points, in the samples' coordinates.
-    mesh: TriMesh,
-    /// The final tangency points, in the samples' coordinates.
-    points: TangentPoints,
-    /// Every sample sphere's tree: the rounds' when they built one, else built on first use.
-    tree: OnceLock<SphereTree>,
-}
-
-/// The final screened Poisson solve (every sample a side point, [`UnitBox::sides`]) and the
-/// counts of the spheres that own no point.
+/// The final screened Poisson solve (every sample a side point, [`UnitBox::sides`], and
+/// `extra` ones), its mesh in the samples' coordinates, and the counts of the spheres that own
+/// no point.
 fn final_solve(
     unit: &UnitBox,
     params: &Params,
-    rounds: Rounds,
+    cloud: &TangentPoints,
+    extra: &[rfta_spsr::SidePoint],
     journal: &mut Journal,
-) -> Result<(Solved, FinalSolveReport)> {
-    let cloud = rounds.cloud;
+) -> Result<(TriMesh, FinalSolveReport)> {
     let mut report = FinalSolveReport::default();
     crate::pool::waiters_back();
     let t = Instant::now();
-    let sides = unit.sides();
-    let solved = crate::rounds::solve(&cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
+    let mut sides = unit.sides();
+    sides.extend_from_slice(extra);
+    let solved = crate::rounds::solve(cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
     report.side_errors = solved.report.side_errors;
     let mut mesh = solved.mesh;
     journal.timed(Step::FinalSolve, t);
@@ -91,16 +109,74 @@ fn final_solve(
     report.far_spheres = unit.far_spheres(params);
     report.spheres_without_point = n.saturating_sub(owners.len() + report.far_spheres);
     mesh.map_vertices(|v| unit.to_input(v));
-    let tree = OnceLock::new();
-    if let Some(all) = rounds.all {
-        let _ = tree.set(all);
-    }
-    let points = TangentPoints {
-        points: cloud.points.iter().map(|&p| unit.to_input(p)).collect(),
-        normals: cloud.normals,
-        owners: cloud.owners,
+    Ok((mesh, report))
+}
+
+/// Re-solves at most to open the cavities the samples leave open ([`open_cavities`]).
+pub(crate) const CAVITY_PASSES: usize = 2;
+
+/// What [`open_cavities`] leaves.
+struct Opened {
+    mesh: TriMesh,
+    repair: RepairReport,
+    /// The final solve's side errors when its surface was replaced.
+    side_errors: Option<Vec<usize>>,
+}
+
+/// Re-solves while the repaired mesh has cavities the samples leave open
+/// ([`rfta_repair::cavity_openings`]: outside samples in a cavity next to outside samples beyond
+/// the surface on the grid), with a point in each such gap kept outside, and repairs again; a
+/// result is kept when it has fewer cavities, at most [`CAVITY_PASSES`] times.
+#[allow(clippy::too_many_arguments)]
+fn open_cavities(
+    samples: &SdfSamples,
+    grid: &rfta_geom::Grid,
+    unit: &UnitBox,
+    params: &Params,
+    cloud: &TangentPoints,
+    tree: &OnceLock<SphereTree>,
+    mesh: TriMesh,
+    repair_report: RepairReport,
+) -> Result<Opened> {
+    let mut best = Opened {
+        mesh,
+        repair: repair_report,
+        side_errors: None,
     };
-    Ok((Solved { mesh, points, tree }, report))
+    let found = best.repair.cavities;
+    let mut extra: Vec<rfta_spsr::SidePoint> = Vec::new();
+    for _ in 0..CAVITY_PASSES {
+        let openings = rfta_repair::cavity_openings(&best.mesh, &unit.sphere_set(), grid);
+        if openings.points.is_empty() {
+            break;
+        }
+        extra.extend(
+            openings
+                .points
+                .iter()
+                .map(|&position| rfta_spsr::SidePoint {
+                    position,
+                    inside: false,
+                }),
+        );
+        // The re-solve's and the repair's own steps are timed together as one.
+        let mut scratch = Journal::default();
+        let (mesh, solve) = final_solve(unit, params, cloud, &extra, &mut scratch)?;
+        let (mesh, repair) = repair(samples, unit, params, tree, mesh, &mut scratch);
+        if repair.cavities >= best.repair.cavities {
+            break;
+        }
+        best = Opened {
+            mesh,
+            repair,
+            side_errors: Some(solve.side_errors),
+        };
+        if best.repair.cavities == 0 {
+            break;
+        }
+    }
+    best.repair.cavities_opened = found - best.repair.cavities;
+    Ok(best)
 }
 
 /// Repair: components the samples contradict or do not witness removed, samples near the
@@ -180,10 +256,7 @@ fn repair(
         );
         journal.timed(Step::Topology, t);
     }
-    report.cavities = face_components(&mesh)
-        .iter()
-        .filter(|faces| signed_volume(&mesh, faces) < 0.0)
-        .count();
+    report.cavities = rfta_mesh::cavities(&mesh).len();
     (mesh, report)
 }
 
@@ -226,11 +299,17 @@ pub(crate) fn verdict(
         ));
     }
     if report.repair.cavities > 0 {
-        journal.warnings.push(format!(
-            "the mesh encloses {} cavit{} around samples outside the shape: unless the shape is hollow there, a hole or a gap the surface closed around them, which finer samples can open",
-            report.repair.cavities,
-            if report.repair.cavities == 1 { "y" } else { "ies" }
-        ));
+        let n = report.repair.cavities;
+        let what = if n == 1 { "y" } else { "ies" };
+        journal.warnings.push(if params.keep_cavities || samples.as_grid().is_none() {
+            format!(
+                "the mesh encloses {n} cavit{what} around samples outside the shape: unless the shape is hollow there, a hole or a gap the surface closed around them, which finer samples can open"
+            )
+        } else {
+            format!(
+                "the mesh encloses {n} cavit{what} around samples outside the shape that could not be opened: walled in by inside samples (a void the samples show), or closed again by the surface"
+            )
+        });
     }
     if let Some(&shortest) = c.thin_loops.first() {
         journal.warnings.push(format!(
