@@ -421,7 +421,7 @@ fn write_consistency(
             }
             writeln!(
                 s,
-                "| {n} | reference {m} | {} of {} | - | - | - | - | {} |",
+                "| {n} | reference {m} | {} of {} | - | - | - | - | - | {} |",
                 known.len(),
                 shapes.len(),
                 known.iter().filter(|&&k| k).count()
