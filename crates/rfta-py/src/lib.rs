@@ -131,7 +131,10 @@ fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::P
         } else if let Ok(i) = value.extract::<i64>() {
             i.into()
         } else if let Ok(x) = value.extract::<f64>() {
-            serde_json::Number::from_f64(x).map_or(serde_json::Value::Null, Into::into)
+            // JSON has no NaN or infinity (serde_json would make them null: no setting).
+            serde_json::Number::from_f64(x)
+                .ok_or_else(|| PyValueError::new_err(format!("{key}: {x} is not finite")))?
+                .into()
         } else {
             return Err(PyValueError::new_err(format!(
                 "{key}: {} is not a number or a bool",

@@ -125,6 +125,8 @@ def test_a_wrong_setting_is_refused_by_name():
     S = torus_sdf(grid(8))
     with pytest.raises(ValueError, match="rounds"):
         rfta.reconstruct(S, bounds=(-1, 1), rounds=2.5)
+    with pytest.raises(ValueError, match="clamp"):
+        rfta.reconstruct(S, bounds=(-1, 1), clamp=float("inf"))
 
 
 def test_a_known_genus_cuts_the_torus_and_the_report_says_so():
