@@ -15,6 +15,7 @@ mod psr;
 mod reconstruct;
 mod sample;
 mod ui;
+mod view;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -67,6 +68,10 @@ enum Command {
     /// Reconstruct every row of a manifest (or one shard of it), for job arrays: status CSV,
     /// resume, timeouts (docs/batch.md).
     Batch(batch::Args),
+    /// A mesh as one HTML page that opens without a network: an interactive 3D view, with the
+    /// samples on the wrong side, the spheres entered, thin handles, cavities and islands marked
+    /// (`--sdf`), and marching cubes' mesh of the same grid to compare.
+    View(view::Args),
     /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
     Info {
         /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .ply .csv .xyz SDF samples).
@@ -108,6 +113,7 @@ fn main() -> ExitCode {
         Command::Reconstruct(args) => reconstruct::run(args, &ui),
         Command::Demo(args) => reconstruct::demo(args, &ui),
         Command::Batch(args) => batch::run(args, cli.threads, &ui),
+        Command::View(args) => view::run(args, &ui),
         Command::Info { file, bounds } => info::run(&file, bounds, &ui),
         Command::Mc {
             input,

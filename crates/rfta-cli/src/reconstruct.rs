@@ -50,6 +50,11 @@ pub(crate) struct Args {
     /// Also write the report's key figures as JSON (counts, agreement with the samples, seconds).
     #[arg(long, value_name = "JSON")]
     report: Option<PathBuf>,
+    /// Also write the mesh as one HTML page that opens without a network (an interactive 3D
+    /// view with the samples on the wrong side, the spheres entered, thin handles, cavities and
+    /// islands marked, marching cubes' mesh of the same grid to compare, the report's figures).
+    #[arg(long, value_name = "HTML")]
+    html: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) tuning: Tuning,
 }
@@ -325,6 +330,9 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     if let Some(p) = &args.points {
         files.write("--points", p);
     }
+    if let Some(p) = &args.html {
+        files.write("--html", p);
+    }
     files.check()?;
     if rfta_io::is_sdf_2d(&args.input)? {
         crate::ui::check_output_2d(&args.output)?;
@@ -390,6 +398,18 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     if let Some(path) = &args.report {
         write_report(path, &out, seconds)?;
     }
+    if let Some(path) = &args.html {
+        let title = format!("rfta reconstruct {}", args.input.display());
+        let scene = crate::view::scene(
+            &title,
+            &out.mesh,
+            Some(&samples),
+            out.report.input.clamp,
+            figures(&out.report),
+        )?;
+        crate::view::write(path, &scene)?;
+        ui.say(format!("wrote {}", path.display()));
+    }
     if let Some(path) = &args.points {
         let p = &out.points;
         let cloud = rfta::geom::OrientedPoints::new(p.points.clone(), p.normals.clone(), None)
@@ -402,6 +422,31 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The report's figures for a page: its serde form's numbers, flags and short lists, by name,
+/// then its warnings.
+fn figures(report: &rfta::Report) -> Vec<(String, String)> {
+    let Ok(serde_json::Value::Object(all)) = serde_json::to_value(report) else {
+        return Vec::new();
+    };
+    all.into_iter()
+        .filter_map(|(k, v)| match v {
+            serde_json::Value::Number(n) => Some((k, n.to_string())),
+            serde_json::Value::Bool(b) => Some((k, b.to_string())),
+            serde_json::Value::Array(a) if a.len() <= 12 && a.iter().all(|x| x.is_number()) => {
+                let items: Vec<String> = a.iter().map(|x| x.to_string()).collect();
+                Some((k, items.join(", ")))
+            }
+            _ => None,
+        })
+        .chain(
+            report
+                .warnings
+                .iter()
+                .map(|w| ("warning".to_string(), w.clone())),
+        )
+        .collect()
 }
 
 /// The report as one JSON object: [`rfta::Report`]'s serde form, and the mesh's size and the

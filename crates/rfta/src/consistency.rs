@@ -87,6 +87,55 @@ pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Resu
     measure_with(samples, mesh, &Topology::of(mesh), clamp)
 }
 
+/// Which samples [`measure`] counts: those on the wrong side of the mesh, those whose sphere it
+/// enters (by the same margins), and the loops around its thin handles as vertex paths.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Marked {
+    /// Samples on the wrong side (by winding number) with `|s| > SIGN_MARGIN h`.
+    pub wrong_side: Vec<usize>,
+    /// Samples whose sphere the mesh enters by more than `ENTER_MARGIN h`.
+    pub entered: Vec<usize>,
+    /// The loops of [`Consistency::thin_loops`], each a cycle of mesh vertices.
+    pub thin_loops: Vec<Vec<u32>>,
+}
+
+/// The samples and loops [`measure`] counts, one sample at a time (for showing them: a winding
+/// number and a distance per sample, without the grid's shortcuts).
+pub fn marked(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Result<Marked> {
+    if mesh.faces.is_empty() {
+        return Ok(Marked::default());
+    }
+    let h = samples.spacing();
+    let clamp = clamp.unwrap_or(f64::INFINITY);
+    let index = MeshIndex::new(mesh)?;
+    let values = samples.values();
+    let flags: Vec<(bool, bool)> = (0..samples.len())
+        .into_par_iter()
+        .map(|i| {
+            let (p, s) = (samples.position(i), values[i]);
+            let wrong = s.abs() > SIGN_MARGIN * h && (index.winding_number(p) > 0.5) != (s < 0.0);
+            let entered = index.unsigned_distance(p) < s.abs().min(clamp) - ENTER_MARGIN * h;
+            (wrong, entered)
+        })
+        .collect();
+    let topology = Topology::of(mesh);
+    let thin_loops = if topology
+        .genus()
+        .is_none_or(|g| g == 0 || g > THIN_LOOP_MAX_GENUS)
+    {
+        Vec::new()
+    } else {
+        rfta_mesh::short_loops(mesh, THIN_LOOP * h)
+            .map(|l| l.loops)
+            .unwrap_or_default()
+    };
+    Ok(Marked {
+        wrong_side: (0..flags.len()).filter(|&i| flags[i].0).collect(),
+        entered: (0..flags.len()).filter(|&i| flags[i].1).collect(),
+        thin_loops,
+    })
+}
+
 /// [`measure`] with the mesh's topology already at hand (the pipeline computes it once for its
 /// mesh check and this).
 pub(crate) fn measure_with(
@@ -585,6 +634,34 @@ mod tests {
                 "{features:?}"
             );
             assert!(checked > 3900, "{checked}");
+        }
+    }
+
+    /// The samples `marked` lists are the ones `measure` counts (a ball's mesh against a torus's
+    /// grid: many on the wrong side, many spheres entered), on a grid and scattered.
+    #[test]
+    fn the_marked_samples_are_the_counted_ones() {
+        let grid = rfta_geom::Grid::cube(12, -1.0, 1.0).expect("grid");
+        let torus = |p: DVec3| {
+            let ring = (p.x * p.x + p.y * p.y).sqrt() - 0.55;
+            (ring * ring + p.z * p.z).sqrt() - 0.25
+        };
+        let values: Vec<f64> = (0..grid.len()).map(|i| torus(grid.position(i))).collect();
+        let mesh = rfta_geom::shapes::icosphere(0.6, 3);
+        let positions: Vec<DVec3> = (0..grid.len()).map(|i| grid.position(i)).collect();
+        for samples in [
+            SdfSamples::grid(grid, values.clone()).expect("samples"),
+            SdfSamples::scattered(positions, values).expect("samples"),
+        ] {
+            let counted = measure(&samples, &mesh, None).expect("measure");
+            let found = marked(&samples, &mesh, None).expect("marked");
+            assert!(
+                counted.sign_errors > 10 && counted.entered > 10,
+                "{counted:?}"
+            );
+            assert_eq!(found.wrong_side.len(), counted.sign_errors);
+            assert_eq!(found.entered.len(), counted.entered);
+            assert!(found.thin_loops.is_empty());
         }
     }
 }

@@ -1,0 +1,129 @@
+//! The pages `rfta view` and `rfta reconstruct --html` write, opened in headless Chromium with
+//! the network off: the viewer reports a drawn frame, and the screenshot shows the mesh.
+//!
+//! Needs Chromium (Debian's `chromium`, or `RFTA_CHROMIUM`); skipped with a message where it is
+//! missing, except under CI (`CI` set), where it is installed and a missing browser fails.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rfta(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rfta"))
+        .args(args)
+        .output()
+        .expect("run rfta")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn chromium() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("RFTA_CHROMIUM") {
+        return Some(PathBuf::from(p));
+    }
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|name| {
+            Command::new(name)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        })
+        .map(PathBuf::from)
+}
+
+/// Chromium headless on `page` with the network off (every host unresolvable) and software
+/// WebGL, with `what` (`--dump-dom`, or `--screenshot=PATH`).
+fn open(browser: &Path, page: &Path, what: &str) -> Output {
+    Command::new(browser)
+        .args([
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--enable-unsafe-swiftshader",
+            "--use-angle=swiftshader",
+            "--host-resolver-rules=MAP * ~NOTFOUND",
+            "--window-size=900,600",
+            "--virtual-time-budget=10000",
+            what,
+        ])
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("run chromium")
+}
+
+/// Pixels of an RGB(A) PNG: width, height, and whether each is (nearly) white.
+fn white_pixels(png: &Path) -> (usize, usize, Vec<bool>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(png).expect("the screenshot"),
+    ));
+    let mut reader = decoder.read_info().expect("a PNG");
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).expect("a frame");
+    let step = info.color_type.samples();
+    let white = buf[..info.buffer_size()]
+        .chunks(step)
+        .map(|p| p[..3].iter().all(|&c| c > 235))
+        .collect();
+    (info.width as usize, info.height as usize, white)
+}
+
+#[test]
+#[expect(clippy::print_stderr, reason = "the test says when it was skipped")]
+fn a_report_page_draws_the_mesh_offline() {
+    let Some(browser) = chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs Chromium for the page test (apt-get install chromium)"
+        );
+        eprintln!("SKIPPED a_report_page_draws_the_mesh_offline: no Chromium");
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("rfta-view-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (npy, mesh, page) = (dir.join("t.npy"), dir.join("t.ply"), dir.join("t.html"));
+    let o = rfta(&["sample", "--shape", "torus", "--res", "16", "-o", s(&npy)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = rfta(&[
+        "-q",
+        "reconstruct",
+        s(&npy),
+        "-o",
+        s(&mesh),
+        "--html",
+        s(&page),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&page).expect("the page");
+    assert!(text.contains("loops around thin handles") && text.contains("components"));
+
+    // The viewer ran to its first frame without an error.
+    let dom = open(&browser, &page, "--dump-dom");
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    assert!(dom.contains("data-ready=\"1\""), "not drawn: {dom:.2000}");
+
+    // The mesh fills part of the view (the left part of the window, the panel on the right),
+    // around its centre; a blank canvas would be white.
+    let shot = dir.join("t.png");
+    let o = open(&browser, &page, &format!("--screenshot={}", shot.display()));
+    assert!(shot.exists(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (w, h, white) = white_pixels(&shot);
+    let view_w = w - 330;
+    let drawn = (0..h)
+        .flat_map(|y| (0..view_w).map(move |x| (x, y)))
+        .filter(|&(x, y)| !white[y * w + x])
+        .count();
+    let share = drawn as f64 / (view_w * h) as f64;
+    assert!(share > 0.05 && share < 0.9, "{share:.3} of the view drawn");
+    let around_centre = (h / 2 - 60..h / 2 + 60)
+        .flat_map(|y| (view_w / 2 - 60..view_w / 2 + 60).map(move |x| (x, y)))
+        .filter(|&(x, y)| !white[y * w + x])
+        .count();
+    assert!(
+        around_centre > 1000,
+        "{around_centre} pixels drawn near the centre"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
