@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use rfta::geom::{SdfSamples, TriMesh};
-use rfta_view::{Curves, Layer, Marks, Scene};
+use rfta_view::{Found, Scene};
 
 use crate::ui::{Ui, parse_bounds};
 
@@ -66,9 +66,8 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     Ok(())
 }
 
-/// The page of `mesh`: its faces classed (the largest component, cavities, other components);
-/// with `samples`, the samples on the wrong side and the spheres entered marked, the loops
-/// around thin handles drawn, and on a grid marching cubes' mesh as a hidden layer.
+/// The page of `mesh` ([`rfta_view::reconstruction`]); with `samples`, what they find
+/// ([`found`]).
 pub(crate) fn scene(
     title: &str,
     mesh: &TriMesh,
@@ -76,69 +75,41 @@ pub(crate) fn scene(
     clamp: Option<f64>,
     figures: Vec<(String, String)>,
 ) -> Result<Scene> {
-    let mut layers = vec![Layer {
-        face_class: face_classes(mesh),
-        ..Layer::plain("mesh", mesh.clone())
-    }];
-    let mut marks = Vec::new();
-    let mut curves = Vec::new();
-    if let Some(s) = samples {
-        if let Some(grid) = s.as_grid() {
-            let mc = rfta_mc::marching_cubes(grid, s.values(), 0.0);
-            layers.push(Layer {
-                visible: false,
-                ..Layer::plain("marching cubes (same samples)", mc)
-            });
-        }
-        let found = rfta::consistency::marked(s, mesh, clamp)?;
-        marks.push(Marks {
-            name: "samples on the wrong side".into(),
-            color: [220, 30, 30],
-            points: found.wrong_side.iter().map(|&i| s.position(i)).collect(),
-        });
-        marks.push(Marks {
-            name: "samples whose sphere the mesh enters".into(),
-            color: [230, 180, 0],
-            points: found.entered.iter().map(|&i| s.position(i)).collect(),
-        });
-        curves.push(Curves {
-            name: "loops around thin handles".into(),
-            color: [0, 150, 60],
-            loops: found
-                .thin_loops
-                .iter()
-                .map(|l| l.iter().map(|&v| mesh.vertices[v as usize]).collect())
-                .collect(),
-        });
-    }
-    Ok(Scene {
-        title: title.into(),
-        layers,
-        marks,
-        curves,
+    let found = match samples {
+        Some(s) => Some(found(s, mesh, clamp)?),
+        None => None,
+    };
+    Ok(rfta_view::reconstruction(
+        title,
+        mesh,
+        found.as_ref(),
         figures,
-    })
+    ))
 }
 
-/// Per face: 0 in the largest component, 1 in a cavity (a component facing inward), 2 in
-/// another component.
-fn face_classes(mesh: &TriMesh) -> Vec<u8> {
-    let parts = rfta_mesh::face_components(mesh);
-    let largest = (0..parts.len()).max_by_key(|&k| (parts[k].len(), std::cmp::Reverse(k)));
-    let mut class = vec![0u8; mesh.n_faces()];
-    for (k, faces) in parts.iter().enumerate() {
-        let c = if Some(k) == largest {
-            0
-        } else if rfta_mesh::signed_volume(mesh, faces) < 0.0 {
-            1
-        } else {
-            2
-        };
-        for &f in faces {
-            class[f] = c;
-        }
-    }
-    class
+/// What `samples` find on `mesh`: [`rfta::consistency::marked`]'s samples and loops, and on a
+/// grid marching cubes' mesh of the same samples.
+pub(crate) fn found(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Result<Found> {
+    let marked = rfta::consistency::marked(samples, mesh, clamp)?;
+    Ok(Found {
+        wrong_side: marked
+            .wrong_side
+            .iter()
+            .map(|&i| samples.position(i))
+            .collect(),
+        entered: marked
+            .entered
+            .iter()
+            .map(|&i| samples.position(i))
+            .collect(),
+        thin_loops: marked.thin_loops,
+        compare: samples.as_grid().map(|grid| {
+            (
+                "marching cubes (same samples)".to_string(),
+                rfta_mc::marching_cubes(grid, samples.values(), 0.0),
+            )
+        }),
+    })
 }
 
 /// Writes the page atomically.

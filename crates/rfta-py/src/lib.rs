@@ -233,30 +233,7 @@ fn reconstruct<'py>(
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let params = params(preset, options)?;
-    let values = values.as_slice()?.to_vec();
-    let samples = match (positions, dims, lo, hi) {
-        (Some(p), None, None, None) => {
-            let p = points(&p, "U")?;
-            if p.len() != values.len() {
-                return Err(PyValueError::new_err(format!(
-                    "U has {} points but S has {} values",
-                    p.len(),
-                    values.len()
-                )));
-            }
-            match Grid::fit(&p) {
-                Some((grid, index)) => SdfSamples::grid(grid, in_grid_order(&index, &values)),
-                None => SdfSamples::scattered(p, values),
-            }
-        }
-        (None, Some(dims), Some(lo), Some(hi)) => SdfSamples::grid(grid_of(dims, lo, hi)?, values),
-        _ => {
-            return Err(PyValueError::new_err(
-                "give positions, or dims with lo and hi",
-            ));
-        }
-    }
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let samples = samples_of(values, positions, dims, lo, hi)?;
     let out = detached(py, progress, |progress, cancel| {
         rfta::reconstruct_cancellable(&samples, &params, progress, cancel)
     })?;
@@ -350,6 +327,93 @@ fn in_grid_order(index: &[usize], values: &[f64]) -> Vec<f64> {
         on_grid[i] = v;
     }
     on_grid
+}
+
+/// The samples: `values` at `positions`, a grid when they are one (in any order), or on the
+/// grid `dims` over `lo`..`hi` (C order).
+fn samples_of(
+    values: PyReadonlyArray1<'_, f64>,
+    positions: Option<PyReadonlyArray2<'_, f64>>,
+    dims: Option<[usize; 3]>,
+    lo: Option<[f64; 3]>,
+    hi: Option<[f64; 3]>,
+) -> PyResult<SdfSamples> {
+    let values = values.as_slice()?.to_vec();
+    match (positions, dims, lo, hi) {
+        (Some(p), None, None, None) => {
+            let p = points(&p, "U")?;
+            if p.len() != values.len() {
+                return Err(PyValueError::new_err(format!(
+                    "U has {} points but S has {} values",
+                    p.len(),
+                    values.len()
+                )));
+            }
+            match Grid::fit(&p) {
+                Some((grid, index)) => SdfSamples::grid(grid, in_grid_order(&index, &values)),
+                None => SdfSamples::scattered(p, values),
+            }
+        }
+        (None, Some(dims), Some(lo), Some(hi)) => SdfSamples::grid(grid_of(dims, lo, hi)?, values),
+        _ => {
+            return Err(PyValueError::new_err(
+                "give positions, or dims with lo and hi",
+            ));
+        }
+    }
+    .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// The HTML page of a reconstruction (`rfta_view`): the mesh `(V, triangles)` against its
+/// samples (as for [`reconstruct`]), with `figures` (name, value) in its table.
+#[pyfunction]
+#[pyo3(signature = (vertices, triangles, values, positions=None, dims=None, lo=None, hi=None, clamp=None, title="rfta", figures=Vec::new()))]
+#[expect(clippy::too_many_arguments, reason = "the Python wrapper's keywords")]
+fn page(
+    py: Python<'_>,
+    vertices: PyReadonlyArray2<'_, f64>,
+    triangles: PyReadonlyArray2<'_, i64>,
+    values: PyReadonlyArray1<'_, f64>,
+    positions: Option<PyReadonlyArray2<'_, f64>>,
+    dims: Option<[usize; 3]>,
+    lo: Option<[f64; 3]>,
+    hi: Option<[f64; 3]>,
+    clamp: Option<f64>,
+    title: &str,
+    figures: Vec<(String, String)>,
+) -> PyResult<String> {
+    let vertices = points(&vertices, "V")?;
+    let faces = faces(&triangles, vertices.len())?;
+    let mesh = TriMesh { vertices, faces };
+    let samples = samples_of(values, positions, dims, lo, hi)?;
+    py.detach(|| {
+        let marked = rfta::consistency::marked(&samples, &mesh, clamp).map_err(error)?;
+        let found = rfta_view::Found {
+            wrong_side: marked
+                .wrong_side
+                .iter()
+                .map(|&i| samples.position(i))
+                .collect(),
+            entered: marked
+                .entered
+                .iter()
+                .map(|&i| samples.position(i))
+                .collect(),
+            thin_loops: marked.thin_loops,
+            compare: samples.as_grid().map(|grid| {
+                (
+                    "marching cubes (same samples)".to_string(),
+                    rfta_mc::marching_cubes(grid, samples.values(), 0.0),
+                )
+            }),
+        };
+        Ok(rfta_view::html(&rfta_view::reconstruction(
+            title,
+            &mesh,
+            Some(&found),
+            figures,
+        )))
+    })
 }
 
 /// The report as a dict: `rfta::Report`'s serde form, and whether the samples were a grid.
@@ -478,6 +542,7 @@ fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("NoSurfaceError", m.py().get_type::<NoSurfaceError>())?;
     m.add_function(wrap_pyfunction!(reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(reconstruct_2d, m)?)?;
+    m.add_function(wrap_pyfunction!(page, m)?)?;
     m.add_function(wrap_pyfunction!(screened_poisson, m)?)?;
     m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(signed_distance, m)?)?;

@@ -365,3 +365,15 @@ def test_side_by_side_with_gpytoolbox():
     ours = torus_chamfer(V, F, np.random.default_rng(5))
     theirs = torus_chamfer(Vg, np.asarray(Fg), np.random.default_rng(5))
     assert ours <= theirs, (ours, theirs)
+
+
+def test_a_reconstruction_writes_its_page(tmp_path):
+    S = torus_sdf(grid(16))
+    r = rfta.reconstruct(S, bounds=(-1, 1))
+    page = r.to_html(tmp_path / "t.html", title="a torus")
+    assert page.startswith("<!DOCTYPE html>") and "a torus" in page
+    assert (tmp_path / "t.html").read_text(encoding="utf-8") == page
+    # The report's figures and the markings are in it; nothing is fetched from a network.
+    assert "sign_errors" in page and "loops around thin handles" in page
+    assert "marching cubes (same samples)" in page
+    assert 'src="http' not in page and 'href="http' not in page

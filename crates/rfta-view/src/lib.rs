@@ -4,7 +4,8 @@
 //!
 //! A [`Scene`] holds meshes (each face in a class with its own colour: the main surface, a
 //! cavity, an island), marked points (samples on the wrong side, spheres entered), curves
-//! (loops around thin handles) and figures; [`html`] writes it.
+//! (loops around thin handles) and figures; [`html`] writes it. [`reconstruction`] makes the
+//! scene of a reconstructed mesh from what its samples found ([`Found`]).
 //!
 //! # Example
 //! ```
@@ -29,8 +30,12 @@
 //! assert!(!page.contains("src=\"http") && !page.contains("href=\"http"));
 //! ```
 
+mod report;
+
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
+
+pub use report::{Found, face_classes, reconstruction};
 
 const THREE: &str = include_str!("../vendor/three/three.module.min.js");
 const ORBIT: &str = include_str!("../vendor/three/OrbitControls.js");

@@ -84,7 +84,7 @@ try {
   for (const m of scene.marks) {
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(floats(m.positions), 3));
-    const material = new THREE.PointsMaterial({ color: color(m.color), size: size / 80, depthTest: false });
+    const material = new THREE.PointsMaterial({ color: color(m.color), size: size / 50, depthTest: false });
     const points = new THREE.Points(geometry, material);
     points.renderOrder = 2;
     world.add(points);

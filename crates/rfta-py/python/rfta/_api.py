@@ -109,6 +109,35 @@ class Reconstruction:
     thinner than the samples resolve; ``cavities``, inward-facing components), ``warnings``,
     ``timings`` in seconds."""
 
+    samples: Optional[tuple] = field(default=None, repr=False)
+    """The samples it was made from (values, positions, grid), for ``to_html``."""
+
+    def to_html(self, path: Optional[str] = None, title: str = "rfta") -> str:
+        """The mesh as one HTML page that opens without a network: an interactive 3D view with
+        the samples on the wrong side, the spheres entered, thin handles, cavities and islands
+        marked, marching cubes' mesh of the same grid as a layer, and the report's figures (as
+        ``rfta reconstruct --html`` writes it). Written to ``path`` when given; returned."""
+        if self.samples is None:
+            raise ValueError("to_html needs the samples: a Reconstruction from rfta.reconstruct")
+        values, positions, grid = self.samples
+        figures = [
+            (k, ", ".join(map(str, v)) if isinstance(v, list) else str(v))
+            for k, v in self.report.items()
+            if isinstance(v, (int, float, bool)) or (isinstance(v, list) and len(v) <= 12
+                                                     and all(isinstance(x, (int, float)) for x in v))
+        ] + [("warning", w) for w in self.report.get("warnings", [])]
+        keywords = dict(positions=positions) if grid is None else dict(
+            dims=list(grid[0]), lo=grid[1], hi=grid[2]
+        )
+        page = _rfta.page(
+            self.vertices, self.faces.astype(np.int64), values,
+            clamp=self.report.get("clamp"), title=title, figures=figures, **keywords,
+        )
+        if path is not None:
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(page)
+        return page
+
     def to_trimesh(self) -> Any:
         """The mesh as a ``trimesh.Trimesh`` (needs the ``trimesh`` package)."""
         try:
@@ -215,7 +244,7 @@ def reconstruct(
     V, F, P, N, report = _run(
         S.ravel(), positions, grid, preset, options, _printer(verbose, progress)
     )
-    return Reconstruction(V, F, P, N, report)
+    return Reconstruction(V, F, P, N, report, samples=(S.ravel(), positions, grid))
 
 
 def reach_for_the_arcs(

@@ -25,6 +25,18 @@ def reconstruct(
     npt.NDArray[np.float64],
     dict,
 ]: ...
+def page(
+    vertices: npt.NDArray[np.float64],
+    triangles: npt.NDArray[np.int64],
+    values: npt.NDArray[np.float64],
+    positions: Optional[npt.NDArray[np.float64]] = None,
+    dims: Optional[Sequence[int]] = None,
+    lo: Optional[Sequence[float]] = None,
+    hi: Optional[Sequence[float]] = None,
+    clamp: Optional[float] = None,
+    title: str = "rfta",
+    figures: Sequence[Tuple[str, str]] = ...,
+) -> str: ...
 def reconstruct_2d(
     values: npt.NDArray[np.float64],
     positions: npt.NDArray[np.float64],

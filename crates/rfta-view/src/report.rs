@@ -1,0 +1,118 @@
+//! The page of a reconstruction: its mesh with each face classed, and what its samples found.
+
+use rfta_geom::TriMesh;
+use rfta_geom::glam::DVec3;
+
+use crate::{Curves, Layer, Marks, Scene};
+
+/// What the samples say of a mesh, for [`reconstruction`].
+#[derive(Debug, Clone, Default)]
+pub struct Found {
+    /// Samples on the wrong side of the mesh.
+    pub wrong_side: Vec<DVec3>,
+    /// Samples whose sphere the mesh enters.
+    pub entered: Vec<DVec3>,
+    /// Loops around the mesh's thin handles, as cycles of its vertices.
+    pub thin_loops: Vec<Vec<u32>>,
+    /// Another method's mesh of the same samples (marching cubes), shown as a hidden layer.
+    pub compare: Option<(String, TriMesh)>,
+}
+
+/// The scene of `mesh`: its faces classed (the largest component, cavities: components facing
+/// inward, other components), with `found` marked on it, and the `figures`.
+pub fn reconstruction(
+    title: &str,
+    mesh: &TriMesh,
+    found: Option<&Found>,
+    figures: Vec<(String, String)>,
+) -> Scene {
+    let mut layers = vec![Layer {
+        face_class: face_classes(mesh),
+        ..Layer::plain("mesh", mesh.clone())
+    }];
+    let mut marks = Vec::new();
+    let mut curves = Vec::new();
+    if let Some(f) = found {
+        if let Some((name, other)) = &f.compare {
+            layers.push(Layer {
+                visible: false,
+                ..Layer::plain(name, other.clone())
+            });
+        }
+        marks.push(Marks {
+            name: "samples on the wrong side".into(),
+            color: [220, 30, 30],
+            points: f.wrong_side.clone(),
+        });
+        marks.push(Marks {
+            name: "samples whose sphere the mesh enters".into(),
+            color: [230, 180, 0],
+            points: f.entered.clone(),
+        });
+        curves.push(Curves {
+            name: "loops around thin handles".into(),
+            color: [0, 150, 60],
+            loops: f
+                .thin_loops
+                .iter()
+                .map(|l| {
+                    l.iter()
+                        .filter_map(|&v| mesh.vertices.get(v as usize).copied())
+                        .collect()
+                })
+                .collect(),
+        });
+    }
+    Scene {
+        title: title.into(),
+        layers,
+        marks,
+        curves,
+        figures,
+    }
+}
+
+/// Per face: 0 in the largest component, 1 in a cavity (a component facing inward), 2 in
+/// another component.
+pub fn face_classes(mesh: &TriMesh) -> Vec<u8> {
+    let parts = rfta_mesh::face_components(mesh);
+    let largest = (0..parts.len()).max_by_key(|&k| (parts[k].len(), std::cmp::Reverse(k)));
+    let mut class = vec![0u8; mesh.n_faces()];
+    for (k, faces) in parts.iter().enumerate() {
+        let c = if Some(k) == largest {
+            0
+        } else if rfta_mesh::signed_volume(mesh, faces) < 0.0 {
+            1
+        } else {
+            2
+        };
+        for &f in faces {
+            class[f] = c;
+        }
+    }
+    class
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rfta_geom::shapes;
+
+    /// A ball with a bubble inside and a small ball beside it: the faces of each in their class.
+    #[test]
+    fn faces_are_classed_by_component() {
+        let mut mesh = shapes::icosphere(1.0, 2);
+        let mut bubble = shapes::icosphere(0.3, 1);
+        for f in &mut bubble.faces {
+            f.swap(1, 2);
+        }
+        let mut beside = shapes::icosphere(0.2, 1);
+        beside.map_vertices(|p| p + DVec3::new(2.0, 0.0, 0.0));
+        let n = [mesh.n_faces(), bubble.n_faces(), beside.n_faces()];
+        mesh.append(&bubble);
+        mesh.append(&beside);
+        let classes = face_classes(&mesh);
+        let count = |c: u8| classes.iter().filter(|&&k| k == c).count();
+        assert_eq!([count(0), count(1), count(2)], n);
+    }
+}
