@@ -127,3 +127,36 @@ fn a_report_page_draws_the_mesh_offline() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `rfta view` writes the page of any mesh: against its samples, with the marks and marching
+/// cubes' layer; without them, the mesh and its figures only. It refuses to write over its mesh.
+#[test]
+fn view_writes_the_page_of_a_mesh() {
+    let dir = std::env::temp_dir().join(format!("rfta-view-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (npy, mesh, page) = (dir.join("t.npy"), dir.join("t.obj"), dir.join("t.html"));
+    let o = rfta(&[
+        "sample",
+        "--shape",
+        "torus",
+        "--res",
+        "12",
+        "-o",
+        s(&npy),
+        "--save-mesh",
+        s(&mesh),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = rfta(&["view", s(&mesh), "--sdf", s(&npy), "-o", s(&page)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&page).expect("the page");
+    assert!(text.contains("marching cubes (same samples)") && text.contains("on the wrong side"));
+    let o = rfta(&["view", s(&mesh), "-o", s(&page)]);
+    assert!(o.status.success());
+    let text = std::fs::read_to_string(&page).expect("the page");
+    assert!(text.contains("genus") && !text.contains("marching cubes (same samples)"));
+    let o = rfta(&["view", s(&mesh), "-o", s(&mesh)]);
+    assert!(!o.status.success(), "wrote the page over its mesh");
+    let _ = std::fs::remove_dir_all(&dir);
+}
