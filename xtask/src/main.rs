@@ -1,8 +1,9 @@
 //! Project automation, run as `cargo xtask <command>`:
 //!
 //! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, the Python package's tests,
-//!   shaders, tidy, a quick eval and quick scenarios.
+//!   the Slurm job array, shaders, tidy, a quick eval and quick scenarios.
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
+//! - `slurm`: docs/batch.md's job-array script on a real one-node Slurm cluster (see [`slurm`]).
 //! - `tidy`: repository rules (see [`tidy`]).
 //! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
 //! - `bench spsr | e2e`: our screened Poisson against PoissonRecon, and the whole reconstruction
@@ -18,6 +19,7 @@ mod bench;
 mod eval;
 mod method;
 mod shaders;
+mod slurm;
 mod tidy;
 
 use std::path::{Path, PathBuf};
@@ -30,8 +32,10 @@ cargo xtask <command>
 
 commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, gpytoolbox's own tests against the drop-in, pytest), shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
+            fresh venv, gpytoolbox's own tests against the drop-in, pytest), slurm, shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
   shaders   validate every shaders/*.wgsl with naga
+  slurm     [--out DIR] docs/batch.md's Slurm job-array script, unchanged, on a one-node cluster started
+            here (slurm-wlm, munge; root): dev grids and a corrupt row, then a cancelled task resumed
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
             [rfta-genus: the default preset told the ground truth's genus; not run unless named]
@@ -64,6 +68,7 @@ fn main() -> Result<()> {
         Some("eval") => eval::run(&root, &args[1..]),
         Some("bench") => bench::run(&root, &args[1..]),
         Some("bench-child") => bench::child_main(&args[1..]),
+        Some("slurm") => slurm::run(&root, &args[1..]),
         Some("help" | "--help" | "-h") | None => {
             print!("{HELP}");
             Ok(())
@@ -195,6 +200,8 @@ fn ci(root: &Path) -> Result<()> {
         "==> python: the rfta package built into a fresh venv, gpytoolbox's tests, then pytest"
     );
     python(root, &cargo)?;
+    println!("==> slurm: docs/batch.md's job array on a one-node Slurm cluster started here");
+    slurm::run(root, &[])?;
     println!("==> shaders");
     shaders::run(root)?;
     println!("==> tidy");
