@@ -67,7 +67,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
 }
 
 /// The page of `mesh` ([`rfta_view::reconstruction`]); with `samples`, what they find
-/// ([`found`]).
+/// ([`Found::of`]).
 pub(crate) fn scene(
     title: &str,
     mesh: &TriMesh,
@@ -76,7 +76,7 @@ pub(crate) fn scene(
     figures: Vec<(String, String)>,
 ) -> Result<Scene> {
     let found = match samples {
-        Some(s) => Some(found(s, mesh, clamp)?),
+        Some(s) => Some(Found::of(s, mesh, clamp)?),
         None => None,
     };
     Ok(rfta_view::reconstruction(
@@ -85,31 +85,6 @@ pub(crate) fn scene(
         found.as_ref(),
         figures,
     ))
-}
-
-/// What `samples` find on `mesh`: [`rfta::consistency::marked`]'s samples and loops, and on a
-/// grid marching cubes' mesh of the same samples.
-pub(crate) fn found(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Result<Found> {
-    let marked = rfta::consistency::marked(samples, mesh, clamp)?;
-    Ok(Found {
-        wrong_side: marked
-            .wrong_side
-            .iter()
-            .map(|&i| samples.position(i))
-            .collect(),
-        entered: marked
-            .entered
-            .iter()
-            .map(|&i| samples.position(i))
-            .collect(),
-        thin_loops: marked.thin_loops,
-        compare: samples.as_grid().map(|grid| {
-            (
-                "marching cubes (same samples)".to_string(),
-                rfta_mc::marching_cubes(grid, samples.values(), 0.0),
-            )
-        }),
-    })
 }
 
 /// Writes the page atomically.

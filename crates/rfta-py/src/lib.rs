@@ -387,26 +387,7 @@ fn page(
     let mesh = TriMesh { vertices, faces };
     let samples = samples_of(values, positions, dims, lo, hi)?;
     py.detach(|| {
-        let marked = rfta::consistency::marked(&samples, &mesh, clamp).map_err(error)?;
-        let found = rfta_view::Found {
-            wrong_side: marked
-                .wrong_side
-                .iter()
-                .map(|&i| samples.position(i))
-                .collect(),
-            entered: marked
-                .entered
-                .iter()
-                .map(|&i| samples.position(i))
-                .collect(),
-            thin_loops: marked.thin_loops,
-            compare: samples.as_grid().map(|grid| {
-                (
-                    "marching cubes (same samples)".to_string(),
-                    rfta_mc::marching_cubes(grid, samples.values(), 0.0),
-                )
-            }),
-        };
+        let found = rfta_view::Found::of(&samples, &mesh, clamp).map_err(error)?;
         Ok(rfta_view::html(&rfta_view::reconstruction(
             title,
             &mesh,

@@ -18,6 +18,41 @@ pub struct Found {
     pub compare: Option<(String, TriMesh)>,
 }
 
+#[cfg(feature = "samples")]
+impl Found {
+    /// What `samples` find on `mesh` (feature `samples`): `rfta::consistency::marked`'s samples
+    /// and loops, and on a grid marching cubes' mesh of the same samples.
+    ///
+    /// # Errors
+    /// As `rfta::consistency::marked`.
+    pub fn of(
+        samples: &rfta_geom::SdfSamples,
+        mesh: &TriMesh,
+        clamp: Option<f64>,
+    ) -> Result<Self, rfta::Error> {
+        let marked = rfta::consistency::marked(samples, mesh, clamp)?;
+        Ok(Self {
+            wrong_side: marked
+                .wrong_side
+                .iter()
+                .map(|&i| samples.position(i))
+                .collect(),
+            entered: marked
+                .entered
+                .iter()
+                .map(|&i| samples.position(i))
+                .collect(),
+            thin_loops: marked.thin_loops,
+            compare: samples.as_grid().map(|grid| {
+                (
+                    "marching cubes (same samples)".to_string(),
+                    rfta_mc::marching_cubes(grid, samples.values(), 0.0),
+                )
+            }),
+        })
+    }
+}
+
 /// The scene of `mesh`: its faces classed (the largest component, cavities: components facing
 /// inward, other components), with `found` marked on it, and the `figures`.
 pub fn reconstruction(
