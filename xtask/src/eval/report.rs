@@ -343,7 +343,7 @@ pub(crate) fn write_markdown(
     }
     writeln!(
         s,
-        "\n`contact_sheet.png`: one row per shape, the ground truth first, then each method's output by resolution."
+        "\n`contact_sheet.png` (labelled in `contact_sheet.html`): one row per shape, the ground truth first, then each method's output by resolution, every face coloured by its distance to the ground truth."
     )?;
     rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
     Ok(())
