@@ -42,7 +42,7 @@ commands:
             [--2d: the 2D pipeline and marching squares on inputs2d, --res 16,32,64]
             [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]: Table 2 with marching
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
-            chamfer.svg, contact_sheet.png); --depth and --owner-band override the rfta methods'
+            chamfer.svg, contact_sheet.png and .html); --depth and --owner-band override the rfta methods'
             Poisson depth and owner band (0: every sphere owns points)
             --scenario noise,clamp,scattered,swept,collision,params [--levels L,..]: the paper's
             Figures 23 (relative noise, levels 0.005,0.01,0.02,0.05), 24 (clamps at 4,2,1 spacings,
