@@ -53,8 +53,8 @@ fn open(browser: &Path, page: &Path, what: &str) -> Output {
         .expect("run chromium")
 }
 
-/// Pixels of an RGB(A) PNG: width, height, and whether each is (nearly) white.
-fn white_pixels(png: &Path) -> (usize, usize, Vec<bool>) {
+/// Pixels of an RGB(A) PNG: width, height, and each one's RGB.
+fn pixels(png: &Path) -> (usize, usize, Vec<[u8; 3]>) {
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(png).expect("the screenshot"),
     ));
@@ -62,11 +62,21 @@ fn white_pixels(png: &Path) -> (usize, usize, Vec<bool>) {
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).expect("a frame");
     let step = info.color_type.samples();
-    let white = buf[..info.buffer_size()]
+    let rgb = buf[..info.buffer_size()]
         .chunks(step)
-        .map(|p| p[..3].iter().all(|&c| c > 235))
+        .map(|p| [p[0], p[1], p[2]])
         .collect();
-    (info.width as usize, info.height as usize, white)
+    (info.width as usize, info.height as usize, rgb)
+}
+
+/// Pixels of an RGB(A) PNG: width, height, and whether each is (nearly) white.
+fn white_pixels(png: &Path) -> (usize, usize, Vec<bool>) {
+    let (w, h, rgb) = pixels(png);
+    (
+        w,
+        h,
+        rgb.iter().map(|p| p.iter().all(|&c| c > 235)).collect(),
+    )
 }
 
 #[test]
@@ -158,5 +168,65 @@ fn view_writes_the_page_of_a_mesh() {
     assert!(text.contains("genus") && !text.contains("marching cubes (same samples)"));
     let o = rfta(&["view", s(&mesh), "-o", s(&mesh)]);
     assert!(!o.status.success(), "wrote the page over its mesh");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A ball with a bubble inside it (a void the samples wall in, kept): the page opens seeing
+/// through the surface, and the cavity's orange shows in the middle of the view, where the
+/// bubble is.
+#[test]
+#[expect(clippy::print_stderr, reason = "the test says when it was skipped")]
+fn a_cavity_shows_where_it_is() {
+    let Some(browser) = chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs Chromium for the page test"
+        );
+        eprintln!("SKIPPED a_cavity_shows_where_it_is: no Chromium");
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("rfta-view-cavity-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (npy, mesh, page) = (dir.join("b.npy"), dir.join("b.ply"), dir.join("b.html"));
+    let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
+    let values: Vec<f64> = (0..grid.len())
+        .map(|i| {
+            let p = grid.position(i);
+            (p.length() - 0.7).max(0.3 - p.length())
+        })
+        .collect();
+    rfta_io::write_sdf_grid(&npy, &grid, &values).expect("write the grid");
+    let o = rfta(&[
+        "-q",
+        "reconstruct",
+        s(&npy),
+        "-o",
+        s(&mesh),
+        "--html",
+        s(&page),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let shot = dir.join("b.png");
+    let o = open(&browser, &page, &format!("--screenshot={}", shot.display()));
+    assert!(shot.exists(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (w, h, rgb) = pixels(&shot);
+    let view_w = w - 330;
+    // Orange seen through the blue-grey surface: red above blue (the surface alone has more blue
+    // than red, the white background as much).
+    let orange = |p: [u8; 3]| i32::from(p[0]) - i32::from(p[2]) > 25;
+    let count = |x0: usize, x1: usize, y0: usize, y1: usize| {
+        (y0..y1)
+            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+            .filter(|&(x, y)| orange(rgb[y * w + x]))
+            .count()
+    };
+    let centre = count(view_w / 2 - 50, view_w / 2 + 50, h / 2 - 50, h / 2 + 50);
+    let corners = count(0, 60, 0, 60) + count(view_w - 60, view_w, h - 60, h);
+    assert!(
+        centre > 2000,
+        "{centre} orange pixels in the middle of the view"
+    );
+    assert_eq!(corners, 0, "orange in the view's corners");
     let _ = std::fs::remove_dir_all(&dir);
 }
