@@ -2,33 +2,17 @@
 //! case ends with its documented exit status and a message that names the file and the problem,
 //! never a panic; every mesh written is finite and watertight.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::{rfta, s, temp};
 use rfta_geom::TriMesh;
 
 fn corpus(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../tests/bad_inputs")
         .join(name)
-}
-
-fn rfta(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rfta"))
-        .args(args)
-        .output()
-        .expect("run rfta")
-}
-
-fn temp(tag: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("rfta-bad-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&p);
-    std::fs::create_dir_all(&p).expect("temp dir");
-    p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 /// Runs `rfta reconstruct` (one fine-tuning round, to keep the suite quick) on a corpus file.

@@ -1,36 +1,16 @@
 //! `rfta batch`: shards run as concurrent processes, a killed shard resumed, a timeout, and the
 //! job-array recipes of docs/batch.md checked by their shard arithmetic.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
+use common::{command, rfta, s, stderr, temp};
 use rfta_geom::Grid;
 use rfta_geom::glam::DVec3;
-
-fn rfta() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rfta"))
-}
-
-fn run(args: &[&str]) -> Output {
-    rfta().args(args).output().expect("run rfta")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn temp(tag: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("rfta-batch-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&p);
-    std::fs::create_dir_all(&p).expect("temp dir");
-    p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
 
 /// A torus (radii 0.5 and `tube`) sampled on an `(n+1)^3` grid over [-1, 1]^3.
 fn torus_grid(path: &Path, n: usize, tube: f64) {
@@ -71,7 +51,7 @@ fn status_rows(path: &Path) -> BTreeMap<usize, (String, String)> {
 
 /// `rfta reconstruct` of `input` as one would run it by hand, for comparison.
 fn reference(input: &Path, output: &Path) -> Vec<u8> {
-    let o = run(&["-q", "reconstruct", s(input), "-o", s(output)]);
+    let o = rfta(&["-q", "reconstruct", s(input), "-o", s(output)]);
     assert!(o.status.success(), "{}", stderr(&o));
     std::fs::read(output).expect("reference mesh")
 }
@@ -99,7 +79,7 @@ fn three_concurrent_shards_do_every_row_once() {
 
     let children: Vec<_> = (0..3)
         .map(|i| {
-            rfta()
+            command()
                 .args(["-q", "--threads", "1", "batch"])
                 .arg(dir.join("m.csv"))
                 .args(["--shard", &format!("{i}/3")])
@@ -150,7 +130,7 @@ fn three_concurrent_shards_do_every_row_once() {
         .collect();
     let mut args = vec!["batch", "--status", s(&merged), "--merge"];
     args.extend(shards.iter().map(|p| s(p)));
-    let o = run(&args);
+    let o = rfta(&args);
     assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
     let table = String::from_utf8_lossy(&o.stdout);
     assert!(table.contains("| ok | 6 |"), "{table}");
@@ -176,7 +156,7 @@ fn a_killed_shard_resumes() {
     std::fs::write(&m, manifest).expect("manifest");
     let status = dir.join("m.shard-0-of-1.status.csv");
 
-    let mut child = rfta()
+    let mut child = command()
         .args(["-q", "--threads", "1", "batch"])
         .arg(&m)
         .stderr(Stdio::null())
@@ -199,7 +179,7 @@ fn a_killed_shard_resumes() {
         "the kill should land mid-batch: {before:?}"
     );
 
-    let o = run(&["-q", "--threads", "1", "batch", s(&m)]);
+    let o = rfta(&["-q", "--threads", "1", "batch", s(&m)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let after = status_rows(&status);
     assert_eq!(after.len(), rows);
@@ -240,7 +220,7 @@ fn the_timeout_stops_a_slow_row() {
     )
     .expect("manifest");
     let t = Instant::now();
-    let o = run(&["-q", "batch", s(&dir.join("m.csv")), "--timeout", "3"]);
+    let o = rfta(&["-q", "batch", s(&dir.join("m.csv")), "--timeout", "3"]);
     let took = t.elapsed();
     assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
     assert!(took < Duration::from_secs(60), "took {took:?}");
@@ -296,7 +276,7 @@ fn the_job_array_recipes_cover_the_manifest() {
     for (name, shards) in [("slurm", slurm), ("kubernetes", k8s)] {
         let mut seen = vec![0; rows];
         for shard in &shards {
-            let o = run(&["batch", s(&m), "--shard", shard, "--dry-run"]);
+            let o = rfta(&["batch", s(&m), "--shard", shard, "--dry-run"]);
             assert!(o.status.success(), "{name} {shard}: {}", stderr(&o));
             for line in String::from_utf8_lossy(&o.stdout).lines() {
                 let row: usize = line

@@ -1,31 +1,9 @@
 //! The `rfta` binary, end to end.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use common::{rfta, s, stderr, temp};
 use rfta_io::read_sdf;
-
-fn rfta(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rfta"))
-        .args(args)
-        .output()
-        .expect("run rfta")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn temp(tag: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("rfta-cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&p);
-    std::fs::create_dir_all(&p).expect("temp dir");
-    p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
 
 /// `rfta sample gt.obj --res 20` reproduces the reference grid (libigl's exact distance and
 /// winding-number sign) to 1e-9 absolute, sign included, for every prepared input.

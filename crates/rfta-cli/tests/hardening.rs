@@ -2,33 +2,14 @@
 //! test whose inputs the test makes: what was lost, overwritten, panicked or taken silently is now
 //! refused with a clear message or handled right, and every input is byte-for-byte as it was.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::{rfta, s, stderr, temp};
 use rfta_geom::Grid;
 use rfta_geom::glam::DVec3;
-
-fn rfta(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rfta"))
-        .args(args)
-        .output()
-        .expect("run rfta")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn temp(tag: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("rfta-hardening-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&p);
-    std::fs::create_dir_all(&p).expect("temp dir");
-    p
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
 
 /// A torus (radii 0.5 and 0.2) on an `(n+1)^3` grid over `[-scale, scale]^3`, values scaled alike.
 fn torus_grid(path: &Path, n: usize, scale: f64) {

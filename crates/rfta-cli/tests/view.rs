@@ -4,25 +4,20 @@
 //! Needs Chromium (Debian's `chromium`, or `RFTA_CHROMIUM`); skipped with a message where it is
 //! missing, except under CI (`CI` set), where it is installed and a missing browser fails.
 
+mod common;
+
+use common::{rfta, s, stderr, temp};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn rfta(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rfta"))
-        .args(args)
-        .output()
-        .expect("run rfta")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
-
-fn chromium() -> Option<PathBuf> {
+/// Chromium (`RFTA_CHROMIUM`, or found on the PATH); `None`, said on stderr, where there is
+/// none, which CI does not allow.
+#[expect(clippy::print_stderr, reason = "the test says when it was skipped")]
+fn chromium(test: &str) -> Option<PathBuf> {
     if let Some(p) = std::env::var_os("RFTA_CHROMIUM") {
         return Some(PathBuf::from(p));
     }
-    ["chromium", "chromium-browser", "google-chrome"]
+    let found = ["chromium", "chromium-browser", "google-chrome"]
         .into_iter()
         .find(|name| {
             Command::new(name)
@@ -30,7 +25,15 @@ fn chromium() -> Option<PathBuf> {
                 .output()
                 .is_ok_and(|o| o.status.success())
         })
-        .map(PathBuf::from)
+        .map(PathBuf::from);
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs Chromium for the page tests (apt-get install chromium)"
+        );
+        eprintln!("SKIPPED {test}: no Chromium");
+    }
+    found
 }
 
 /// Chromium headless on `page` with the network off (every host unresolvable) and software
@@ -80,22 +83,14 @@ fn white_pixels(png: &Path) -> (usize, usize, Vec<bool>) {
 }
 
 #[test]
-#[expect(clippy::print_stderr, reason = "the test says when it was skipped")]
 fn a_report_page_draws_the_mesh_offline() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs Chromium for the page test (apt-get install chromium)"
-        );
-        eprintln!("SKIPPED a_report_page_draws_the_mesh_offline: no Chromium");
+    let Some(browser) = chromium("a_report_page_draws_the_mesh_offline") else {
         return;
     };
-    let dir = std::env::temp_dir().join(format!("rfta-view-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = temp("a_report_page_draws_the_mesh_offline");
     let (npy, mesh, page) = (dir.join("t.npy"), dir.join("t.ply"), dir.join("t.html"));
     let o = rfta(&["sample", "--shape", "torus", "--res", "16", "-o", s(&npy)]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     let o = rfta(&[
         "-q",
         "reconstruct",
@@ -105,7 +100,7 @@ fn a_report_page_draws_the_mesh_offline() {
         "--html",
         s(&page),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&page).expect("the page");
     assert!(text.contains("loops around thin handles") && text.contains("components"));
 
@@ -118,7 +113,7 @@ fn a_report_page_draws_the_mesh_offline() {
     // around its centre; a blank canvas would be white.
     let shot = dir.join("t.png");
     let o = open(&browser, &page, &format!("--screenshot={}", shot.display()));
-    assert!(shot.exists(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(shot.exists(), "{}", stderr(&o));
     let (w, h, white) = white_pixels(&shot);
     let view_w = w - 330;
     let drawn = (0..h)
@@ -142,9 +137,7 @@ fn a_report_page_draws_the_mesh_offline() {
 /// cubes' layer; without them, the mesh and its figures only. It refuses to write over its mesh.
 #[test]
 fn view_writes_the_page_of_a_mesh() {
-    let dir = std::env::temp_dir().join(format!("rfta-view-cli-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = temp("view");
     let (npy, mesh, page) = (dir.join("t.npy"), dir.join("t.obj"), dir.join("t.html"));
     let o = rfta(&[
         "sample",
@@ -157,9 +150,9 @@ fn view_writes_the_page_of_a_mesh() {
         "--save-mesh",
         s(&mesh),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     let o = rfta(&["view", s(&mesh), "--sdf", s(&npy), "-o", s(&page)]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&page).expect("the page");
     assert!(text.contains("marching cubes (same samples)") && text.contains("on the wrong side"));
     let o = rfta(&["view", s(&mesh), "-o", s(&page)]);
@@ -175,19 +168,11 @@ fn view_writes_the_page_of_a_mesh() {
 /// through the surface, and the cavity's orange shows in the middle of the view, where the
 /// bubble is.
 #[test]
-#[expect(clippy::print_stderr, reason = "the test says when it was skipped")]
 fn a_cavity_shows_where_it_is() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs Chromium for the page test"
-        );
-        eprintln!("SKIPPED a_cavity_shows_where_it_is: no Chromium");
+    let Some(browser) = chromium("a_cavity_shows_where_it_is") else {
         return;
     };
-    let dir = std::env::temp_dir().join(format!("rfta-view-cavity-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = temp("a_cavity_shows_where_it_is");
     let (npy, mesh, page) = (dir.join("b.npy"), dir.join("b.ply"), dir.join("b.html"));
     let grid = rfta_geom::Grid::cube(20, -1.0, 1.0).expect("grid");
     let values: Vec<f64> = (0..grid.len())
@@ -206,10 +191,10 @@ fn a_cavity_shows_where_it_is() {
         "--html",
         s(&page),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{}", stderr(&o));
     let shot = dir.join("b.png");
     let o = open(&browser, &page, &format!("--screenshot={}", shot.display()));
-    assert!(shot.exists(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(shot.exists(), "{}", stderr(&o));
     let (w, h, rgb) = pixels(&shot);
     let view_w = w - 330;
     // Orange seen through the blue-grey surface: red above blue (the surface alone has more blue
