@@ -50,17 +50,22 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             topology.genus().map_or("-".into(), |g| g.to_string()),
         ),
     ];
-    if let Some(s) = &samples {
-        let c = rfta::consistency::measure(s, &mesh, None)?;
+    // The samples are walked once: the marks, and the figures counted from them (the same
+    // samples rfta::consistency::measure counts).
+    let found = match &samples {
+        Some(s) => Some(Found::of(s, &mesh, None)?),
+        None => None,
+    };
+    if let (Some(s), Some(f)) = (&samples, &found) {
         figures.extend([
             ("samples".to_string(), s.len().to_string()),
-            ("on the wrong side".into(), c.sign_errors.to_string()),
-            ("spheres entered".into(), c.entered.to_string()),
-            ("thin loops".into(), c.thin_loops.len().to_string()),
+            ("on the wrong side".into(), f.wrong_side.len().to_string()),
+            ("spheres entered".into(), f.entered.len().to_string()),
+            ("thin loops".into(), f.thin_loops.len().to_string()),
         ]);
     }
     let title = args.mesh.display().to_string();
-    let scene = scene(&title, &mesh, samples.as_ref(), None, figures)?;
+    let scene = rfta_view::reconstruction(&title, &mesh, found.as_ref(), figures);
     write(&args.output, &scene)?;
     ui.say(format!("wrote {}", args.output.display()));
     Ok(())
