@@ -68,8 +68,14 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     let cluster = Cluster::start(&out.join("cluster"))?;
     let started = Instant::now();
     let result = (|| {
-        first_run(&cluster, &out.join("grids"), &inputs, &rfta, &script)?;
-        cancelled_run(&cluster, &out.join("cancel"), &inputs, &rfta, &script)
+        let run = Run {
+            cluster: &cluster,
+            inputs: &inputs,
+            rfta: &rfta,
+            script: &script,
+        };
+        run.first(&out.join("grids"))?;
+        run.cancelled(&out.join("cancel"))
     })();
     drop(cluster);
     result?;
@@ -105,7 +111,6 @@ fn job_script(root: &Path) -> Result<String> {
 
 /// A one-node cluster; stopped when dropped.
 struct Cluster {
-    dir: PathBuf,
     conf: PathBuf,
     daemons: Vec<Child>,
 }
@@ -139,7 +144,6 @@ impl Cluster {
             ),
         )?;
         let mut cluster = Self {
-            dir: dir.to_path_buf(),
             conf,
             daemons: Vec::new(),
         };
@@ -265,7 +269,6 @@ impl Drop for Cluster {
             let _ = child.kill();
             let _ = child.wait();
         }
-        let _ = &self.dir;
     }
 }
 
@@ -362,89 +365,99 @@ fn merged(dir: &Path, rfta: &Path) -> Result<(Vec<(String, String)>, i32)> {
     Ok((rows, o.status.code().unwrap_or(-1)))
 }
 
-fn first_run(
-    cluster: &Cluster,
-    dir: &Path,
-    inputs: &Path,
-    rfta: &Path,
-    script: &str,
-) -> Result<()> {
-    let rows = shapes(dir, inputs, 10, true)?;
-    let file = dir.join("rfta-array.sh");
-    std::fs::write(&file, script)?;
-    let t = Instant::now();
-    let id = cluster.submit(dir, &file, rfta, true)?;
-    cluster.wait(&id, Duration::from_secs(600))?;
-    let (table, code) = merged(dir, rfta)?;
-    println!(
-        "slurm: job {id}, {} rows over 8 array tasks, {:.0} s",
-        rows.len(),
-        t.elapsed().as_secs_f64()
-    );
-    if table.len() != rows.len() {
-        bail!(
-            "the merged table has {} rows, the manifest {}",
-            table.len(),
-            rows.len()
-        );
-    }
-    for (input, status) in &table {
-        let expect = if input == "corrupt.npy" {
-            "failed"
-        } else {
-            "ok"
-        };
-        if status != expect {
-            bail!("row {input}: {status}, expected {expect}");
-        }
-    }
-    if code != 4 {
-        bail!("the merge exited with {code}, expected 4 (a failed row)");
-    }
-    same_as_reconstruct(dir, rfta, &rows)
+/// What both runs use: the cluster, the dev grids, the binary, the job script.
+struct Run<'a> {
+    cluster: &'a Cluster,
+    inputs: &'a Path,
+    rfta: &'a Path,
+    script: &'a str,
 }
 
-fn cancelled_run(
-    cluster: &Cluster,
-    dir: &Path,
-    inputs: &Path,
-    rfta: &Path,
-    script: &str,
-) -> Result<()> {
-    let rows = shapes(dir, inputs, 30, false)?;
-    let file = dir.join("rfta-array.sh");
-    std::fs::write(&file, script)?;
-    let id = cluster.submit(dir, &file, rfta, false)?;
-    // Task 0 is cancelled once its shard has a status file (it runs its row).
-    let status = dir.join("shapes/manifest.shard-0-of-8.status.csv");
-    let t = Instant::now();
-    while !status.exists() {
-        if t.elapsed() > Duration::from_secs(120) {
-            bail!("task 0 of job {id} did not start in 120 s");
+impl Run<'_> {
+    /// `dir` with the grids of resolution `n` (and a corrupt one) under `shapes/`, their manifest
+    /// and the job script; the manifest's rows and the script's path.
+    fn prepare(
+        &self,
+        dir: &Path,
+        n: usize,
+        corrupt: bool,
+    ) -> Result<(Vec<(String, String)>, PathBuf)> {
+        let rows = shapes(dir, self.inputs, n, corrupt)?;
+        let file = dir.join("rfta-array.sh");
+        std::fs::write(&file, self.script)?;
+        Ok((rows, file))
+    }
+
+    fn first(&self, dir: &Path) -> Result<()> {
+        let (cluster, rfta) = (self.cluster, self.rfta);
+        let (rows, file) = self.prepare(dir, 10, true)?;
+        let t = Instant::now();
+        let id = cluster.submit(dir, &file, rfta, true)?;
+        cluster.wait(&id, Duration::from_secs(600))?;
+        let (table, code) = merged(dir, rfta)?;
+        println!(
+            "slurm: job {id}, {} rows over 8 array tasks, {:.0} s",
+            rows.len(),
+            t.elapsed().as_secs_f64()
+        );
+        if table.len() != rows.len() {
+            bail!(
+                "the merged table has {} rows, the manifest {}",
+                table.len(),
+                rows.len()
+            );
         }
-        std::thread::sleep(Duration::from_millis(50));
+        for (input, status) in &table {
+            let expect = if input == "corrupt.npy" {
+                "failed"
+            } else {
+                "ok"
+            };
+            if status != expect {
+                bail!("row {input}: {status}, expected {expect}");
+            }
+        }
+        if code != 4 {
+            bail!("the merge exited with {code}, expected 4 (a failed row)");
+        }
+        same_as_reconstruct(dir, rfta, &rows)
     }
-    let o = cluster.command("scancel").arg(format!("{id}_0")).output()?;
-    if !o.status.success() {
-        bail!("scancel: {}", String::from_utf8_lossy(&o.stderr));
+
+    fn cancelled(&self, dir: &Path) -> Result<()> {
+        let (cluster, rfta) = (self.cluster, self.rfta);
+        let (rows, file) = self.prepare(dir, 30, false)?;
+        let id = cluster.submit(dir, &file, rfta, false)?;
+        // Task 0 is cancelled once its shard has a status file (it runs its row).
+        let status = dir.join("shapes/manifest.shard-0-of-8.status.csv");
+        let t = Instant::now();
+        while !status.exists() {
+            if t.elapsed() > Duration::from_secs(120) {
+                bail!("task 0 of job {id} did not start in 120 s");
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let o = cluster.command("scancel").arg(format!("{id}_0")).output()?;
+        if !o.status.success() {
+            bail!("scancel: {}", String::from_utf8_lossy(&o.stderr));
+        }
+        cluster.wait(&id, Duration::from_secs(600))?;
+        let (before, _) = merged(dir, rfta)?;
+        let unfinished = rows.len() - before.iter().filter(|(_, s)| s == "ok").count();
+        if unfinished == 0 {
+            bail!("the cancelled task finished its row anyway: nothing left to resume");
+        }
+        let again = cluster.submit(dir, &file, rfta, true)?;
+        cluster.wait(&again, Duration::from_secs(600))?;
+        let (table, code) = merged(dir, rfta)?;
+        println!(
+            "slurm: job {id} with task 0 cancelled ({unfinished} row(s) left), job {again} resumed"
+        );
+        if table.len() != rows.len() || table.iter().any(|(_, s)| s != "ok" && s != "skipped") {
+            bail!("after the resubmission: {table:?}");
+        }
+        if code != 0 {
+            bail!("the merge exited with {code}");
+        }
+        same_as_reconstruct(dir, rfta, &rows)
     }
-    cluster.wait(&id, Duration::from_secs(600))?;
-    let (before, _) = merged(dir, rfta)?;
-    let unfinished = rows.len() - before.iter().filter(|(_, s)| s == "ok").count();
-    if unfinished == 0 {
-        bail!("the cancelled task finished its row anyway: nothing left to resume");
-    }
-    let again = cluster.submit(dir, &file, rfta, true)?;
-    cluster.wait(&again, Duration::from_secs(600))?;
-    let (table, code) = merged(dir, rfta)?;
-    println!(
-        "slurm: job {id} with task 0 cancelled ({unfinished} row(s) left), job {again} resumed"
-    );
-    if table.len() != rows.len() || table.iter().any(|(_, s)| s != "ok" && s != "skipped") {
-        bail!("after the resubmission: {table:?}");
-    }
-    if code != 0 {
-        bail!("the merge exited with {code}");
-    }
-    same_as_reconstruct(dir, rfta, &rows)
 }
