@@ -75,7 +75,12 @@ fn describe_polylines(path: &Path, c: &rfta_geom::plane::Polylines) -> Result<()
     Ok(())
 }
 
-pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<()> {
+pub(crate) fn run(
+    path: &Path,
+    bounds: Option<GridBounds>,
+    grid: Option<&str>,
+    _ui: &Ui,
+) -> Result<()> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -102,6 +107,7 @@ pub(crate) fn run(path: &Path, bounds: Option<GridBounds>, _ui: &Ui) -> Result<(
         "npy" | "exr" | "csv" | "xyz" | "txt" => {
             describe_sdf(path, rfta_io::read_sdf(path, bounds)?)
         }
+        "vdb" => describe_sdf(path, rfta_io::read_vdb(path, grid, bounds)?),
         "ply" => {
             // A PLY holds a mesh (faces), SDF samples (a scalar) or oriented points (normals).
             let mesh = rfta_io::read_mesh(path);
@@ -176,6 +182,7 @@ fn describe_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
 }
 
 fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
+    let raw_clamp = raw.clamp;
     out!("{}: SDF samples ({})", path.display(), raw.description);
     out!("  samples     {}", raw.values.len());
     match &raw.layout {
@@ -235,9 +242,10 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
                     )
                 }
             );
-            match c.clamp {
-                Some((v, n)) => out!("  clamped     at {v} ({n} plateau samples)"),
-                None => out!("  clamped     no"),
+            match (raw_clamp, c.clamp) {
+                (Some(v), _) => out!("  clamped     at {v} (the file's background value)"),
+                (None, Some((v, n))) => out!("  clamped     at {v} ({n} plateau samples)"),
+                (None, None) => out!("  clamped     no"),
             }
         }
         Err(e) => out!("  valid       no: {e}"),

@@ -74,11 +74,14 @@ enum Command {
     View(view::Args),
     /// Describe a mesh or SDF file: counts, bounds, sign balance, watertightness, genus.
     Info {
-        /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .ply .csv .xyz SDF samples).
+        /// The file (.obj .off .ply .stl .glb meshes; .npy .exr .vdb .ply .csv .xyz SDF samples).
         file: PathBuf,
         /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
         #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = ui::parse_bounds)]
         bounds: Option<rfta_io::GridBounds>,
+        /// The level set of a .vdb file to describe, by name (default: the first level set).
+        #[arg(long, value_name = "NAME")]
+        grid: Option<String>,
     },
 }
 
@@ -114,7 +117,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => reconstruct::demo(args, &ui),
         Command::Batch(args) => batch::run(args, cli.threads, &ui),
         Command::View(args) => view::run(args, &ui),
-        Command::Info { file, bounds } => info::run(&file, bounds, &ui),
+        Command::Info { file, bounds, grid } => info::run(&file, bounds, grid.as_deref(), &ui),
         Command::Mc {
             input,
             output,

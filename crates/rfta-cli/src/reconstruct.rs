@@ -33,7 +33,8 @@ pub(crate) enum Gpu {
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct Args {
-    /// SDF samples: a grid (.npy, .exr) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
+    /// SDF samples: a grid (.npy, .exr), an OpenVDB level set (.vdb: its background is the
+    /// clamp) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
     /// 2D samples are detected: .npy of shape (nx, ny) or (n, 3), .csv rows x y s, 16-bit .png, .exr images.
     input: PathBuf,
     /// Output mesh (.obj .ply .stl .glb); for 2D input, polylines (.obj .svg .csv).
@@ -42,6 +43,9 @@ pub(crate) struct Args {
     /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
     #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = parse_bounds)]
     bounds: Option<rfta_io::GridBounds>,
+    /// The level set of a .vdb file to reconstruct, by name (default: the first level set).
+    #[arg(long, value_name = "NAME")]
+    grid: Option<String>,
     #[command(flatten)]
     pub(crate) checks: Checks,
     /// Also write the final tangency points with their normals (PLY), e.g. for `rfta psr`.
@@ -374,7 +378,17 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             )
         })?;
     }
-    let raw = rfta_io::read_sdf(&args.input, args.bounds)?;
+    let raw = match &args.grid {
+        Some(name) => rfta_io::read_vdb(&args.input, Some(name), args.bounds)?,
+        None => rfta_io::read_sdf(&args.input, args.bounds)?,
+    };
+    // An OpenVDB level set says where it is clamped: its background value.
+    if params.clamp.is_none()
+        && let Some(c) = raw.clamp
+    {
+        ui.say(format!("clamped at {c} (the level set's background value)"));
+        params.clamp = Some(c);
+    }
     let samples = match raw.validate(&args.input) {
         Ok(s) => s,
         Err(rfta_io::Error::Geom {

@@ -3,7 +3,7 @@
 //! | what | read | write |
 //! |---|---|---|
 //! | meshes | OBJ, OFF, PLY (ascii, binary), STL (ascii, binary), GLB | OBJ, PLY (binary), STL (binary), GLB |
-//! | SDF grids | NumPy `.npy` (float32/float64, C or Fortran order), OpenEXR volume | `.npy` (float64), OpenEXR |
+//! | SDF grids | NumPy `.npy` (float32/float64, C or Fortran order), OpenEXR volume, OpenVDB level set | `.npy` (float64), OpenEXR |
 //! | scattered SDF samples | PLY (`x y z` + `sdf`/`value`/`scalar`), CSV/XYZ text (`x y z s`) | |
 //! | oriented points | PLY (`x y z nx ny nz`), text (`x y z nx ny nz`) | PLY |
 //! | tables (batch manifests, status files) | CSV with a header ([`table`]) | CSV lines |
@@ -47,6 +47,7 @@ mod sdf;
 mod stl;
 pub mod table;
 mod text;
+mod vdb;
 
 pub use atomic::{remove_temp_files, write_atomic};
 pub use error::{Error, Result};
@@ -54,7 +55,8 @@ pub use npy::{NpyArray, parse_npy, write_npy_f64};
 pub use plane::{Svg, is_sdf_2d, read_polylines, read_sdf_2d, write_polylines, write_svg};
 pub use sdf::{
     GridBounds, RawSdf, SdfFormat, Sidecar, decode_oriented_points, decode_sdf, peek_sdf_len,
-    read_oriented_points, read_sdf, sidecar_path, write_oriented_points_ply, write_sdf_grid,
+    read_oriented_points, read_sdf, read_vdb, sidecar_path, write_oriented_points_ply,
+    write_sdf_grid,
 };
 
 use std::path::Path;

@@ -6,7 +6,7 @@ use rfta_geom::{Grid, Layout, OrientedPoints, SdfSamples, glam::DVec3};
 
 use crate::error::{ParseError, ParseResult};
 use crate::text::{as_text, content_lines};
-use crate::{Error, Result, exr_volume, extension, npy, ply, read_bytes, write_atomic};
+use crate::{Error, Result, exr_volume, extension, npy, ply, read_bytes, vdb, write_atomic};
 
 /// The corner sample positions of a grid: sample `(0, 0, 0)` at `min`, the last at `max`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,6 +64,9 @@ pub struct RawSdf {
     /// Where the grid's bounds came from: "command line", "sidecar", "file", "default", or
     /// "samples" for scattered input.
     pub bounds_source: &'static str,
+    /// The magnitude the file says its values are clamped at (an OpenVDB level set's
+    /// background), for `Params::clamp` when the caller gives none.
+    pub clamp: Option<f64>,
 }
 
 impl RawSdf {
@@ -84,7 +87,7 @@ impl RawSdf {
 }
 
 /// Reads SDF samples, by extension: `.npy` (a 3-D grid, or an `(n, 4)` array of `x y z s` rows),
-/// `.exr` (a grid, see the crate docs), `.ply` (scattered: vertex `x y z` and a scalar `sdf`,
+/// `.exr` (a grid, see the crate docs), `.vdb` (the first OpenVDB level set, see [`read_vdb`]), `.ply` (scattered: vertex `x y z` and a scalar `sdf`,
 /// `value` or `scalar`), `.csv`, `.xyz`, `.txt` (scattered rows `x y z s`, separated by commas or
 /// whitespace, `#` comments, an optional header line).
 ///
@@ -134,6 +137,11 @@ pub fn peek_sdf_len(path: &Path) -> Result<Option<usize>> {
                 })?;
             Ok(meta.headers.first().map(|h| h.layer_size.area()))
         }
+        SdfFormat::Vdb => {
+            let bytes = read_bytes(path)?;
+            let n = vdb::peek_len(&bytes, None).map_err(|e| e.at(path))?;
+            Ok(n.map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
+        }
         SdfFormat::Ply | SdfFormat::Text => Ok(None),
     }
 }
@@ -145,6 +153,8 @@ pub enum SdfFormat {
     Npy,
     /// OpenEXR volume `.exr`.
     Exr,
+    /// OpenVDB level set `.vdb` (see [`read_vdb`]).
+    Vdb,
     /// PLY point cloud with a per-vertex scalar.
     Ply,
     /// Text rows `x y z s` (`.csv`, `.xyz`, `.txt`).
@@ -160,11 +170,12 @@ impl SdfFormat {
         match extension(path).as_deref() {
             Some("npy") => Ok(Self::Npy),
             Some("exr") => Ok(Self::Exr),
+            Some("vdb") => Ok(Self::Vdb),
             Some("ply") => Ok(Self::Ply),
             Some("csv" | "xyz" | "txt") => Ok(Self::Text),
             _ => Err(Error::UnknownFormat {
                 path: path.to_path_buf(),
-                expected: "SDF samples: .npy, .exr, .ply, .csv, .xyz, .txt",
+                expected: "SDF samples: .npy, .exr, .vdb, .ply, .csv, .xyz, .txt",
             }),
         }
     }
@@ -196,6 +207,7 @@ pub fn decode_sdf(
                         values: arr.data,
                         description: format!("npy grid, shape ({nx}, {ny}, {nz})"),
                         bounds_source: source,
+                        clamp: None,
                     })
                 }
                 &[n, 4] => {
@@ -207,6 +219,7 @@ pub fn decode_sdf(
                         values,
                         description: format!("npy scattered samples, shape ({n}, 4) as rows x y z s"),
                         bounds_source: "samples",
+                        clamp: None,
                     })
                 }
                 other => Err(ParseError::new(format!(
@@ -224,8 +237,10 @@ pub fn decode_sdf(
                 values: vol.values,
                 description: format!("OpenEXR volume, shape ({nx}, {ny}, {nz}), float32"),
                 bounds_source: source,
+                clamp: None,
             })
         }
+        SdfFormat::Vdb => decode_vdb(bytes, None, path, bounds),
         SdfFormat::Ply => {
             let p = ply::parse(bytes).map_err(at)?;
             let positions = p.positions().map_err(at)?;
@@ -235,6 +250,7 @@ pub fn decode_sdf(
                 layout: Layout::Scattered(positions),
                 values,
                 bounds_source: "samples",
+                clamp: None,
             })
         }
         SdfFormat::Text => {
@@ -244,9 +260,38 @@ pub fn decode_sdf(
                 layout: Layout::Scattered(positions),
                 values,
                 bounds_source: "samples",
+                clamp: None,
             })
         }
     }
+}
+
+/// Reads the level set named `grid` from an OpenVDB file (`read_sdf` takes the first level
+/// set): every voxel of the box around its active voxels, inactive ones at plus or minus the
+/// background value, which becomes [`RawSdf::clamp`]. Bounds as for [`read_sdf`], the grid's
+/// transform being the file's own.
+///
+/// # Errors
+/// As [`read_sdf`]; [`Error::Parse`] naming the grids the file holds when none is `grid`.
+pub fn read_vdb(path: &Path, grid: Option<&str>, bounds: Option<GridBounds>) -> Result<RawSdf> {
+    decode_vdb(&read_bytes(path)?, grid, path, bounds)
+}
+
+fn decode_vdb(
+    bytes: &[u8],
+    grid: Option<&str>,
+    path: &Path,
+    bounds: Option<GridBounds>,
+) -> Result<RawSdf> {
+    let set = vdb::parse(bytes, grid).map_err(|e| e.at(path))?;
+    let (grid, source) = resolve_grid(path, set.dims, bounds, Some((set.origin, set.spacing)))?;
+    Ok(RawSdf {
+        layout: Layout::Grid(grid),
+        values: set.values,
+        description: set.description,
+        bounds_source: source,
+        clamp: Some(set.background),
+    })
 }
 
 fn resolve_grid(

@@ -37,6 +37,7 @@ fn every_reader(bytes: &[u8]) {
     for (format, ext) in [
         (SdfFormat::Npy, "npy"),
         (SdfFormat::Exr, "exr"),
+        (SdfFormat::Vdb, "vdb"),
         (SdfFormat::Ply, "ply"),
         (SdfFormat::Text, "csv"),
     ] {
