@@ -517,6 +517,54 @@ fn sample_sdf<'py>(
     Ok(PyArray1::from_vec(py, values))
 }
 
+/// SDF samples from a file, any format `rfta reconstruct` reads (`grid` names the level set of
+/// an OpenVDB file): `(values, dims, lo, hi, points, clamp, description)`, with `dims`, `lo` and
+/// `hi` (the first and last grid point) for a grid, `points` for scattered samples, `clamp` what
+/// the file says its values are clamped at (an OpenVDB level set's background). A missing or
+/// unreadable file is an `OSError`, a malformed one a `ValueError`.
+#[pyfunction]
+#[pyo3(signature = (path, grid=None))]
+fn read_sdf<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    grid: Option<&str>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let read = py.detach(|| match grid {
+        Some(_) => rfta_io::read_vdb(&path, grid, None),
+        None => rfta_io::read_sdf(&path, None),
+    });
+    let raw = read.map_err(|e| match e {
+        rfta_io::Error::Io { .. } => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    })?;
+    let values = PyArray1::from_vec(py, raw.values);
+    let none = || py.None();
+    let (dims, lo, hi, positions) = match &raw.layout {
+        rfta_geom::Layout::Grid(g) => {
+            let b = g.bounds();
+            (
+                g.dims().into_pyobject(py)?.into_any().unbind(),
+                b.min.to_array().into_pyobject(py)?.into_any().unbind(),
+                b.max.to_array().into_pyobject(py)?.into_any().unbind(),
+                none(),
+            )
+        }
+        rfta_geom::Layout::Scattered(p) => (none(), none(), none(), rows(py, p)?.into_any().unbind()),
+    };
+    PyTuple::new(
+        py,
+        [
+            values.into_any().unbind(),
+            dims,
+            lo,
+            hi,
+            positions,
+            raw.clamp.into_pyobject(py)?.into_any().unbind(),
+            raw.description.into_pyobject(py)?.into_any().unbind(),
+        ],
+    )
+}
+
 #[pymodule]
 fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -528,5 +576,6 @@ fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(sample_sdf, m)?)?;
+    m.add_function(wrap_pyfunction!(read_sdf, m)?)?;
     Ok(())
 }

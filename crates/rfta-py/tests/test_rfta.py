@@ -377,3 +377,37 @@ def test_a_reconstruction_writes_its_page(tmp_path):
     assert "sign_errors" in page and "loops around thin handles" in page
     assert "marching cubes (same samples)" in page
     assert 'src="http' not in page and 'href="http' not in page
+
+
+VDB = os.path.join(os.path.dirname(__file__), "..", "..", "rfta-io", "tests", "data", "vdb")
+
+
+def test_read_sdf_gives_an_openvdb_level_set_as_openvdb_makes_it_dense():
+    # box.vdb and its dense twin were written by OpenVDB 10 (rfta-io/tests/data/vdb/make.py).
+    s = rfta.read_sdf(os.path.join(VDB, "box.vdb"))
+    twin = np.load(os.path.join(VDB, "box.npy"))
+    with open(os.path.join(VDB, "box.twin.json")) as f:
+        meta = json.load(f)
+    assert isinstance(s, rfta.Samples) and s.points is None
+    assert s.S.shape == twin.shape
+    assert np.array_equal(s.S, twin.astype(np.float64))
+    assert s.bounds[0] == tuple(meta["origin"])
+    assert s.clamp == meta["background"]
+    assert '"box"' in s.description
+    r = rfta.reconstruct(s, preset="fast")
+    assert r.report["clamp"] == meta["background"]
+    assert r.report["components"] == 1 and r.report["watertight"]
+    # The box make.py gave OpenVDB, within a voxel (0.05).
+    assert np.allclose(r.vertices.min(0), [-0.3, -0.3, 0.05], atol=0.05)
+    assert np.allclose(r.vertices.max(0), [0.5, 0.2, 0.5], atol=0.05)
+
+
+def test_read_sdf_names_what_it_cannot_read():
+    with pytest.raises(ValueError, match="fog volume, not a level set"):
+        rfta.read_sdf(os.path.join(VDB, "three.vdb"), grid="density")
+    with pytest.raises(ValueError, match='no grid named "nope"'):
+        rfta.read_sdf(os.path.join(VDB, "three.vdb"), grid="nope")
+    with pytest.raises(OSError):
+        rfta.read_sdf(os.path.join(VDB, "missing.vdb"))
+    s = rfta.read_sdf(os.path.join(VDB, "three.vdb"), grid="ball")
+    assert s.S.ndim == 3 and s.clamp > 0

@@ -10,7 +10,9 @@ Two ways in:
 - ``reconstruct(S, bounds=..., preset="default", ...)``: a grid of values (or scattered samples)
   in, a ``Reconstruction`` (vertices, faces, tangency points, report) out.
 
-Beside them: ``screened_poisson``, ``marching_cubes``, ``signed_distance``, ``sample_sdf``.
+Beside them: ``read_sdf`` (files: ``.npy``, ``.exr``, OpenVDB ``.vdb`` level sets, scattered
+samples; its ``Samples`` go to ``reconstruct`` as they are), ``screened_poisson``,
+``marching_cubes``, ``signed_distance``, ``sample_sdf``.
 
 Arrays may be float32 or float64, in any memory layout; results are float64 vertices and int64
 faces (the drop-in returns int32 faces, as gpytoolbox does). Long calls release the GIL (other Python threads run), stop on Ctrl-C between stages
@@ -22,8 +24,10 @@ message. Results do not depend on the thread count.
 from ._api import (
     NoSurfaceError,
     Reconstruction,
+    Samples,
     marching_cubes,
     reach_for_the_arcs,
+    read_sdf,
     reconstruct,
     sample_sdf,
     screened_poisson,
@@ -34,9 +38,11 @@ from ._rfta import __version__
 __all__ = [
     "NoSurfaceError",
     "Reconstruction",
+    "Samples",
     "__version__",
     "marching_cubes",
     "reach_for_the_arcs",
+    "read_sdf",
     "reconstruct",
     "sample_sdf",
     "screened_poisson",

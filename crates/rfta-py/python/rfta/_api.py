@@ -92,6 +92,52 @@ def _printer(verbose: bool, progress: Optional[Progress]) -> Optional[Progress]:
 
 
 @dataclass
+class Samples:
+    """SDF samples read from a file by ``read_sdf``; pass them to ``reconstruct`` as they are.
+
+    Attributes
+    ----------
+    S : (nx, ny, nz) array, or (n,) with ``points``
+        The values.
+    bounds : ((x, y, z), (x, y, z)) or None
+        The grid's first and last point (``reconstruct``'s ``bounds``); None for scattered samples.
+    points : (n, 3) array or None
+        Scattered sample positions.
+    clamp : float or None
+        The magnitude the file says its values are clamped at (an OpenVDB level set's background).
+    description : str
+        What was read (format, shape, for a level set its name, codec and voxel size).
+    """
+
+    S: np.ndarray
+    bounds: Optional[Tuple[Tuple[float, float, float], Tuple[float, float, float]]]
+    points: Optional[np.ndarray]
+    clamp: Optional[float]
+    description: str
+
+
+def read_sdf(path: Any, grid: Optional[str] = None) -> Samples:
+    """Reads SDF samples from a file: any format ``rfta reconstruct`` reads (``.npy`` grids with
+    their sidecar, ``.exr``, OpenVDB ``.vdb`` level sets, ``.ply``/``.csv``/``.xyz`` scattered
+    samples).
+
+    An OpenVDB level set (the first in the file, or the one named ``grid``) reads as the dense
+    grid of its narrow band: every voxel of the box around its active voxels and one voxel more
+    on every side, inactive voxels at plus or minus the background value, which is the clamp::
+
+        s = rfta.read_sdf("level_set.vdb")
+        mesh = rfta.reconstruct(s)          # bounds and clamp from the file
+
+    Raises ``OSError`` for a file that cannot be read and ``ValueError`` for a malformed one or a
+    ``grid`` that is not a level set of the file (the message names the grids it holds).
+    """
+    values, dims, lo, hi, points, clamp, description = _rfta.read_sdf(str(path), grid)
+    if dims is None:
+        return Samples(values, None, points, clamp, description)
+    return Samples(values.reshape(dims), (tuple(lo), tuple(hi)), None, clamp, description)
+
+
+@dataclass
 class Reconstruction:
     """A reconstructed mesh with its tangency points and the library's report."""
 
@@ -191,9 +237,11 @@ def reconstruct(
 
     Parameters
     ----------
-    S : (nx, ny, nz) array
+    S : (nx, ny, nz) array, or Samples
         The values on a grid: ``S[i, j, k]`` at ``linspace(lo, hi, n)`` on each axis (numpy's
-        ``meshgrid(..., indexing="ij")``). Or, with ``points``, one value per point.
+        ``meshgrid(..., indexing="ij")``). Or, with ``points``, one value per point. Or what
+        ``read_sdf`` read from a file, with its bounds or points and its clamp (``clamp`` given
+        here overrides the file's).
     bounds : (lo, hi), ((xmin, ymin, zmin), (xmax, ymax, zmax)) or 6 numbers
         The grid's corner points (default [-1, 1]^3). Ignored with ``points``.
     preset : "default", "paper" or "fast"
@@ -218,6 +266,10 @@ def reconstruct(
     -------
     Reconstruction
     """
+    if isinstance(S, Samples):
+        bounds, points = S.bounds, S.points
+        clamp = S.clamp if clamp is None else clamp
+        S = S.S
     if points is None:
         S = _array("S", S, 3)
         lo, hi = _bounds(bounds)

@@ -73,3 +73,14 @@ def sample_sdf(
     lo: Sequence[float],
     hi: Sequence[float],
 ) -> npt.NDArray[np.float64]: ...
+def read_sdf(
+    path: str, grid: Optional[str] = None
+) -> Tuple[
+    npt.NDArray[np.float64],
+    Optional[Tuple[int, int, int]],
+    Optional[Tuple[float, float, float]],
+    Optional[Tuple[float, float, float]],
+    Optional[npt.NDArray[np.float64]],
+    Optional[float],
+    str,
+]: ...
