@@ -40,6 +40,8 @@ commands:
   eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
             [rfta-genus: the default preset told the ground truth's genus; not run unless named]
             [--2d: the 2D pipeline and marching squares on inputs2d, --res 16,32,64]
+            [--vdb: each shape as an OpenVDB level set (voxel 2/N, --res 50,100), rfta against
+            OpenVDB's volumeToMesh on it (needs Debian's python3-openvdb)]
             [--samples N] [--depth D] [--owner-band K] [--quick] [--out DIR]: Table 2 with marching
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
             chamfer.svg, contact_sheet.png and .html); --depth and --owner-band override the rfta methods'

@@ -27,6 +27,7 @@ mod render;
 mod report;
 mod scenario;
 mod swept;
+mod vdb;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -89,6 +90,8 @@ struct Args {
     plane: bool,
     /// `--res` was given.
     res_given: bool,
+    /// `--vdb`: rfta against OpenVDB's volumeToMesh on level sets ([`vdb`]).
+    vdb: bool,
 }
 
 /// The methods `--methods` takes; all but the last run without it. `rfta-genus` is the default
@@ -109,6 +112,7 @@ fn parse(args: &[String]) -> Result<Args> {
         levels: None,
         plane: false,
         res_given: false,
+        vdb: false,
     };
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -117,6 +121,7 @@ fn parse(args: &[String]) -> Result<Args> {
             "--inputs" => a.inputs = Some(PathBuf::from(value()?)),
             "--meshes" => a.meshes = Some(PathBuf::from(value()?)),
             "--2d" => a.plane = true,
+            "--vdb" => a.vdb = true,
             "--res" => {
                 a.res_given = true;
                 a.res = value()?
@@ -228,6 +233,18 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         (_, Some(dir)) => load_meshes(dir)?,
         _ => unreachable!("one of them is set above"),
     };
+    if a.vdb {
+        let res = if a.res_given {
+            a.res.clone()
+        } else {
+            vec![50, 100]
+        };
+        let out = a.out.clone().unwrap_or_else(|| {
+            root.join("target/eval")
+                .join(format!("vdb-{}", std::process::id()))
+        });
+        return vdb::run(&shapes, &res, a.samples, &out);
+    }
     if a.quick {
         // One small shape, two resolutions, fewer samples: the CI smoke run (a scenario: one
         // resolution, two levels).
