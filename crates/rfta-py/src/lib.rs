@@ -549,7 +549,9 @@ fn read_sdf<'py>(
                 none(),
             )
         }
-        rfta_geom::Layout::Scattered(p) => (none(), none(), none(), rows(py, p)?.into_any().unbind()),
+        rfta_geom::Layout::Scattered(p) => {
+            (none(), none(), none(), rows(py, p)?.into_any().unbind())
+        }
     };
     PyTuple::new(
         py,
