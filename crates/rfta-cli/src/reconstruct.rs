@@ -492,14 +492,9 @@ fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
     Ok(())
 }
 
-/// Two tori side by side, overlapping: genus 2. The minimum of their exact signed distances is
-/// exact outside and a lower bound on the distance inside, so its spheres never cross the surface.
+/// `rfta demo`'s shape: two overlapping tori, genus 2 ([`rfta::geom::Analytic::TwoTori`]).
 fn two_tori(p: DVec3) -> f64 {
-    let torus = |q: DVec3| {
-        let ring = (q.x * q.x + q.y * q.y).sqrt() - 0.35;
-        (ring * ring + q.z * q.z).sqrt() - 0.15
-    };
-    torus(p - DVec3::new(-0.4, 0.0, 0.0)).min(torus(p - DVec3::new(0.4, 0.0, 0.0)))
+    rfta::geom::Analytic::TwoTori.sdf(p)
 }
 
 #[derive(Debug, clap::Args)]

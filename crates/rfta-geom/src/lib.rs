@@ -35,6 +35,7 @@
 pub use glam;
 
 mod aabb;
+mod analytic;
 mod error;
 pub mod feature_transform;
 pub mod kernels;
@@ -47,6 +48,7 @@ pub mod shapes;
 mod sphere;
 
 pub use aabb::Aabb;
+pub use analytic::Analytic;
 pub use error::Error;
 pub use mesh::TriMesh;
 pub use points::OrientedPoints;

@@ -81,7 +81,8 @@ impl std::fmt::Display for Step {
 }
 
 /// Runs `work` with a counter of finished spheres, reporting it through `progress` from a
-/// monitor thread every half second until `work` returns (the result does not depend on it).
+/// monitor thread every half second until `work` returns (the result does not depend on it; no
+/// reports where no thread can be started).
 pub(crate) fn counted<T>(
     of: usize,
     progress: &mut (dyn FnMut(Stage) + Send),
@@ -90,24 +91,31 @@ pub(crate) fn counted<T>(
     let done = AtomicUsize::new(0);
     let finished = AtomicBool::new(false);
     std::thread::scope(|scope| {
-        let monitor = scope.spawn(|| {
-            let mut last = 0;
-            loop {
-                std::thread::park_timeout(Duration::from_millis(500));
-                if finished.load(Ordering::Acquire) {
-                    break;
+        // Where no thread can be started (WebAssembly without threads), the work runs without
+        // progress reports.
+        let monitor = std::thread::Builder::new()
+            .name("rfta-progress".into())
+            .spawn_scoped(scope, || {
+                let mut last = 0;
+                loop {
+                    std::thread::park_timeout(Duration::from_millis(500));
+                    if finished.load(Ordering::Acquire) {
+                        break;
+                    }
+                    let d = done.load(Ordering::Relaxed);
+                    if d != last {
+                        progress(Stage::Progress { done: d, of });
+                        last = d;
+                    }
                 }
-                let d = done.load(Ordering::Relaxed);
-                if d != last {
-                    progress(Stage::Progress { done: d, of });
-                    last = d;
-                }
-            }
-        });
+            })
+            .ok();
         let out = work(&done);
         finished.store(true, Ordering::Release);
-        monitor.thread().unpark();
-        let _ = monitor.join();
+        if let Some(m) = monitor {
+            m.thread().unpark();
+            let _ = m.join();
+        }
         out
     })
 }
