@@ -419,7 +419,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             &out.mesh,
             Some(&samples),
             out.report.input.clamp,
-            figures(&out.report),
+            rfta_view::report_figures(&out.report),
         )?;
         crate::view::write(path, &scene)?;
         ui.say(format!("wrote {}", path.display()));
@@ -436,31 +436,6 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-/// The report's figures for a page: its serde form's numbers, flags and short lists, by name,
-/// then its warnings.
-fn figures(report: &rfta::Report) -> Vec<(String, String)> {
-    let Ok(serde_json::Value::Object(all)) = serde_json::to_value(report) else {
-        return Vec::new();
-    };
-    all.into_iter()
-        .filter_map(|(k, v)| match v {
-            serde_json::Value::Number(n) => Some((k, n.to_string())),
-            serde_json::Value::Bool(b) => Some((k, b.to_string())),
-            serde_json::Value::Array(a) if a.len() <= 12 && a.iter().all(|x| x.is_number()) => {
-                let items: Vec<String> = a.iter().map(|x| x.to_string()).collect();
-                Some((k, items.join(", ")))
-            }
-            _ => None,
-        })
-        .chain(
-            report
-                .warnings
-                .iter()
-                .map(|w| ("warning".to_string(), w.clone())),
-        )
-        .collect()
 }
 
 /// The report as one JSON object: [`rfta::Report`]'s serde form, and the mesh's size and the

@@ -35,6 +35,8 @@ mod report;
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
+#[cfg(feature = "samples")]
+pub use report::report_figures;
 pub use report::{Found, face_classes, reconstruction};
 
 const THREE: &str = include_str!("../vendor/three/three.module.min.js");

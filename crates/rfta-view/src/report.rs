@@ -53,6 +53,32 @@ impl Found {
     }
 }
 
+/// The report's figures for a page (feature `samples`): its serde form's numbers, flags and
+/// short lists, by name, then its warnings.
+#[cfg(feature = "samples")]
+pub fn report_figures(report: &rfta::Report) -> Vec<(String, String)> {
+    let Ok(serde_json::Value::Object(all)) = serde_json::to_value(report) else {
+        return Vec::new();
+    };
+    all.into_iter()
+        .filter_map(|(k, v)| match v {
+            serde_json::Value::Number(n) => Some((k, n.to_string())),
+            serde_json::Value::Bool(b) => Some((k, b.to_string())),
+            serde_json::Value::Array(a) if a.len() <= 12 && a.iter().all(|x| x.is_number()) => {
+                let items: Vec<String> = a.iter().map(|x| x.to_string()).collect();
+                Some((k, items.join(", ")))
+            }
+            _ => None,
+        })
+        .chain(
+            report
+                .warnings
+                .iter()
+                .map(|w| ("warning".to_string(), w.clone())),
+        )
+        .collect()
+}
+
 /// The scene of `mesh`: its faces classed (the largest component, cavities: components facing
 /// inward, other components), with `found` marked on it, and the `figures`.
 pub fn reconstruction(
