@@ -21,6 +21,7 @@ mod method;
 mod shaders;
 mod slurm;
 mod tidy;
+mod web;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -34,6 +35,9 @@ commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
             fresh venv, gpytoolbox's own tests against the drop-in, pytest), slurm, shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
   shaders   validate every shaders/*.wgsl with naga
+  web       [--out DIR] [--check]: the browser demo (rfta-web as WebAssembly, wasm32-wasip1) as one
+            page, <out>/index.html (default target/web); --check opens it in headless Chromium:
+            the genus-2 shape at 21^3 under 5 s with the native mesh (one thread), a screenshot
   slurm     [--out DIR] docs/batch.md's Slurm job-array script, unchanged, on a one-node cluster started
             here (slurm-wlm, munge; root): dev grids and a corrupt row, then a cancelled task resumed
   tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
@@ -68,6 +72,7 @@ fn main() -> Result<()> {
         Some("shaders") => shaders::run(&root),
         Some("tidy") => tidy::run(&root),
         Some("eval") => eval::run(&root, &args[1..]),
+        Some("web") => web::run(&root, &args[1..]),
         Some("bench") => bench::run(&root, &args[1..]),
         Some("bench-child") => bench::child_main(&args[1..]),
         Some("slurm") => slurm::run(&root, &args[1..]),
@@ -204,6 +209,8 @@ fn ci(root: &Path) -> Result<()> {
     python(root, &cargo)?;
     println!("==> slurm: docs/batch.md's job array on a one-node Slurm cluster started here");
     slurm::run(root, &[])?;
+    println!("==> web --check: the browser demo in headless Chromium");
+    web::run(root, &["--check".to_string()])?;
     println!("==> shaders");
     shaders::run(root)?;
     println!("==> tidy");

@@ -7,69 +7,25 @@
 mod common;
 
 use common::{rfta, s, stderr, temp};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use rfta_testkit::browser::{self, chromium};
+use std::path::Path;
+use std::process::Output;
 
-/// Chromium (`RFTA_CHROMIUM`, or found on the PATH); `None`, said on stderr, where there is
-/// none, which CI does not allow.
-#[expect(clippy::print_stderr, reason = "the test says when it was skipped")]
-fn chromium(test: &str) -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("RFTA_CHROMIUM") {
-        return Some(PathBuf::from(p));
-    }
-    let found = ["chromium", "chromium-browser", "google-chrome"]
-        .into_iter()
-        .find(|name| {
-            Command::new(name)
-                .arg("--version")
-                .output()
-                .is_ok_and(|o| o.status.success())
-        })
-        .map(PathBuf::from);
-    if found.is_none() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs Chromium for the page tests (apt-get install chromium)"
-        );
-        eprintln!("SKIPPED {test}: no Chromium");
-    }
-    found
-}
-
-/// Chromium headless on `page` with the network off (every host unresolvable) and software
-/// WebGL, with `what` (`--dump-dom`, or `--screenshot=PATH`).
+/// Chromium headless on `page` with the network off ([`browser::open`]), doing `what`.
 fn open(browser: &Path, page: &Path, what: &str) -> Output {
-    Command::new(browser)
-        .args([
-            "--headless=new",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--enable-unsafe-swiftshader",
-            "--use-angle=swiftshader",
-            "--host-resolver-rules=MAP * ~NOTFOUND",
-            "--window-size=900,600",
-            "--virtual-time-budget=10000",
-            what,
-        ])
-        .arg(format!("file://{}", page.display()))
-        .output()
-        .expect("run chromium")
+    browser::open(
+        browser,
+        &format!("file://{}", page.display()),
+        (900, 600),
+        10000,
+        what,
+    )
+    .expect("run chromium")
 }
 
-/// Pixels of an RGB(A) PNG: width, height, and each one's RGB.
+/// The pixels of a screenshot ([`browser::pixels`]).
 fn pixels(png: &Path) -> (usize, usize, Vec<[u8; 3]>) {
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(png).expect("the screenshot"),
-    ));
-    let mut reader = decoder.read_info().expect("a PNG");
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).expect("a frame");
-    let step = info.color_type.samples();
-    let rgb = buf[..info.buffer_size()]
-        .chunks(step)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    (info.width as usize, info.height as usize, rgb)
+    browser::pixels(png).expect("the screenshot")
 }
 
 /// Pixels of an RGB(A) PNG: width, height, and whether each is (nearly) white.

@@ -99,7 +99,7 @@ impl Default for Params {
 impl Params {
     /// The reference's `k_search = ceil(2 n^(1/3))` for `n` samples.
     pub fn k_search_for(n: usize) -> usize {
-        (2.0 * (n as f64).cbrt()).ceil().max(1.0) as usize
+        (2.0 * rfta_geom::math::cbrt(n as f64)).ceil().max(1.0) as usize
     }
 
     /// Sphere `s` as its own points see it ([`Params::owner_scale`]).
@@ -311,7 +311,7 @@ pub fn transport(
         return Transported::Unchecked(a);
     }
     let chord = ((a - q).length() / (2.0 * s.radius)).min(1.0);
-    let mut arc = (params.tau / s.radius).min(2.0 * chord.asin()) * s.radius;
+    let mut arc = (params.tau / s.radius).min(2.0 * rfta_geom::math::asin(chord)) * s.radius;
     // Every step lands within `arc` of `a`'s projection (a chord is shorter than its arc), so the
     // spheres that can hold a step by more than `tol` are among those within `arc - tol` of it
     // (padded for rounding): one tree query for all the halvings, then the tree's own test

@@ -175,7 +175,7 @@ pub fn transport_on_sphere(sphere: &Sphere, from: DVec3, to: DVec3, arc_length: 
     let cross = u.cross(w);
     let sin = cross.length();
     let cos = u.dot(w);
-    let total = sin.atan2(cos);
+    let total = crate::math::atan2(sin, cos);
     let theta = (arc_length.max(0.0) / sphere.radius).min(total);
     if theta.is_nan() || theta <= 0.0 {
         return start;
@@ -186,7 +186,7 @@ pub fn transport_on_sphere(sphere: &Sphere, from: DVec3, to: DVec3, arc_length: 
         fallback_perpendicular(u)
     };
     // Rodrigues' rotation of u about an axis perpendicular to it.
-    let rotated = u * theta.cos() + axis.cross(u) * theta.sin();
+    let rotated = u * crate::math::cos(theta) + axis.cross(u) * crate::math::sin(theta);
     sphere.center + sphere.radius * rotated.normalize_or(u)
 }
 
@@ -334,7 +334,7 @@ pub fn solid_angle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let (la, lb, lc) = (a.length(), b.length(), c.length());
     let det = a.dot(b.cross(c));
     let div = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    2.0 * det.atan2(div)
+    2.0 * crate::math::atan2(det, div)
 }
 
 #[cfg(test)]

@@ -39,6 +39,7 @@ mod analytic;
 mod error;
 pub mod feature_transform;
 pub mod kernels;
+pub mod math;
 mod mesh;
 pub mod plane;
 mod points;

@@ -369,7 +369,7 @@ impl SdfSamples {
             Layout::Scattered(_) => {
                 let b = self.bounds();
                 let e = (b.max - b.min).max(DVec3::splat(1e-300));
-                (e.x * e.y * e.z / self.len().max(1) as f64).cbrt()
+                crate::math::cbrt(e.x * e.y * e.z / self.len().max(1) as f64)
             }
         }
     }

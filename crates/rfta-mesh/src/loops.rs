@@ -502,7 +502,7 @@ mod tests {
 
     /// A regular `n`-gon of circumradius `r`: the edge loop a torus mesh has around a circle.
     fn polygon(n: u32, r: f64) -> f64 {
-        2.0 * f64::from(n) * r * (PI / f64::from(n)).sin()
+        2.0 * f64::from(n) * r * rfta_geom::math::sin(PI / f64::from(n))
     }
 
     /// The greedy basis over every vertex as a base, with an unbounded search from each.
@@ -616,8 +616,8 @@ mod tests {
         twisted.map_vertices(|v| {
             let a = 0.5 * v.z + 0.2 * v.x;
             DVec3::new(
-                v.x * a.cos() - v.y * a.sin(),
-                v.x * a.sin() + v.y * a.cos(),
+                v.x * rfta_geom::math::cos(a) - v.y * rfta_geom::math::sin(a),
+                v.x * rfta_geom::math::sin(a) + v.y * rfta_geom::math::cos(a),
                 v.z,
             )
         });

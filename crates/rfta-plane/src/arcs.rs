@@ -26,7 +26,8 @@ pub struct Circle {
 impl Circle {
     /// The point at angle `theta`.
     pub fn point(&self, theta: f64) -> DVec2 {
-        self.center + DVec2::new(theta.cos(), theta.sin()) * self.radius
+        self.center
+            + DVec2::new(rfta_geom::math::cos(theta), rfta_geom::math::sin(theta)) * self.radius
     }
 
     /// The angle of the direction from the centre to `p` (0 when `p` is the centre).
@@ -35,7 +36,7 @@ impl Circle {
         if d == DVec2::ZERO {
             0.0
         } else {
-            d.y.atan2(d.x).rem_euclid(TAU)
+            rfta_geom::math::atan2(d.y, d.x).rem_euclid(TAU)
         }
     }
 }
@@ -69,7 +70,7 @@ impl FreeArcs {
             }
             // Law of cosines: the half-angle of the arc inside `o`.
             let cos = (c.radius * c.radius + d * d - rho * rho) / (2.0 * c.radius * d);
-            let half = cos.clamp(-1.0, 1.0).acos();
+            let half = rfta_geom::math::acos(cos.clamp(-1.0, 1.0));
             let mid = c.angle_of(o.center);
             let (a, b) = ((mid - half).rem_euclid(TAU), 2.0 * half);
             if a + b > TAU {
@@ -202,7 +203,7 @@ impl Owners {
             let sign = if values[i] < 0.0 { 1.0 } else { -1.0 };
             for &t in angles {
                 points.push(circles[i].point(t));
-                normals.push(DVec2::new(t.cos(), t.sin()) * sign);
+                normals.push(DVec2::new(rfta_geom::math::cos(t), rfta_geom::math::sin(t)) * sign);
             }
         }
         (points, normals)

@@ -523,8 +523,8 @@ fn normal_field(
         .map(|d| vec![DVec2::ZERO; (cells(d) + 1) * (cells(d) + 1)])
         .collect();
     for ((&p, &n), &l) in points.iter().zip(normals).zip(lengths) {
-        let d =
-            ((domain.side / l).log2().floor() as i64).clamp(coarsest as i64, depth as i64) as u32;
+        let d = (rfta_geom::math::log2(domain.side / l).floor() as i64)
+            .clamp(coarsest as i64, depth as i64) as u32;
         let hat = Hat::at(p, domain.min, h(d), cells(d));
         let m = cells(d) + 1;
         let scale = l / (h(d) * h(d));

@@ -66,7 +66,10 @@ pub const MAX_RES: usize = 1024;
 
 /// The reference's default resolution for `n` samples in total: `64 * ceil(n^(1/3) / 16)`, at most 1024.
 pub fn default_resolution(n_samples: usize) -> usize {
-    let r = 64 * ((n_samples as f64).cbrt() / 16.0).ceil().max(1.0) as usize;
+    let r = 64
+        * (rfta_geom::math::cbrt(n_samples as f64) / 16.0)
+            .ceil()
+            .max(1.0) as usize;
     r.min(MAX_RES)
 }
 

@@ -192,7 +192,7 @@ pub(crate) fn estimate_density(samples: &mut [Sample], params: &SpsrParams, base
         }
         let (d, rho) = chosen;
         let h2 = (1.0 / f64::from(1u32 << d)).powi(2);
-        let fd = f64::from(d) + 0.5 * (rho / spn).log2();
+        let fd = f64::from(d) + 0.5 * rfta_geom::math::log2(rho / spn);
         s.depth = fd.clamp(f64::from(base), f64::from(depth));
         s.area = s.weight * h2 / rho;
     });

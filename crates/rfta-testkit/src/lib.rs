@@ -13,6 +13,8 @@
 
 use std::path::PathBuf;
 
+pub mod browser;
+
 /// The shared data directory (`RFTA_DATA_DIR`, else `shared/data` found beside or above the
 /// workspace), or `None` if absent.
 pub fn data_dir() -> Option<PathBuf> {

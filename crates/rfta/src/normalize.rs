@@ -219,7 +219,7 @@ pub(crate) fn working_scale(samples: &SdfSamples) -> Option<(SdfSamples, f64)> {
     if !(extent.is_finite() && extent > 0.0) {
         return None;
     }
-    let exponent = extent.log2().floor() as i32;
+    let exponent = rfta_geom::math::log2(extent).floor() as i32;
     if exponent.abs() <= LIMIT {
         return None;
     }

@@ -179,7 +179,7 @@ pub const ROUND_SWEEPS: usize = 4;
 /// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
 pub fn spsr_depth_for(h: f64) -> u32 {
     let cells = SPSR_BOX * CELLS_PER_SPACING / h.max(1e-9);
-    (cells.log2().ceil() as i64).clamp(5, 12) as u32
+    (rfta_geom::math::log2(cells).ceil() as i64).clamp(5, 12) as u32
 }
 
 /// The names of the presets [`Params::preset`] knows, in one place for every front end.

@@ -133,7 +133,8 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     }
     let domain = solve_domain(&cloud, &circles, extent);
     let depth = params.spsr_depth.unwrap_or_else(|| {
-        ((domain.side * CELLS_PER_SPACING / spacing).log2().ceil() as u32).clamp(4, 11)
+        (rfta_geom::math::log2(domain.side * CELLS_PER_SPACING / spacing).ceil() as u32)
+            .clamp(4, 11)
     });
     let spsr_params = SpsrParams {
         depth,

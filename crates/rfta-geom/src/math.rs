@@ -1,0 +1,70 @@
+//! Transcendental functions that give the same bits on every platform.
+//!
+//! `f64::sin`, `asin`, `atan2`, `log2`, `cbrt` and the like call the platform's C library (glibc
+//! natively, wasi-libc's in WebAssembly), whose results differ in the last bit for some inputs;
+//! the fine-tuning amplifies one bit into a different mesh. These are the `libm` crate's (a
+//! pure-Rust port of musl's, the same code on every target), so a run in the browser makes the
+//! native mesh bit for bit. The pipeline calls these, never the standard library's.
+//! (`sqrt`, `floor`, `mul_add` and `powi` are exact or compiled the same everywhere.)
+
+/// Sine.
+#[inline]
+pub fn sin(x: f64) -> f64 {
+    libm::sin(x)
+}
+
+/// Cosine.
+#[inline]
+pub fn cos(x: f64) -> f64 {
+    libm::cos(x)
+}
+
+/// Arcsine.
+#[inline]
+pub fn asin(x: f64) -> f64 {
+    libm::asin(x)
+}
+
+/// Arccosine.
+#[inline]
+pub fn acos(x: f64) -> f64 {
+    libm::acos(x)
+}
+
+/// The angle of `(x, y)`: `atan2(y, x)`, as `y.atan2(x)`.
+#[inline]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    libm::atan2(y, x)
+}
+
+/// Base-2 logarithm.
+#[inline]
+pub fn log2(x: f64) -> f64 {
+    libm::log2(x)
+}
+
+/// Cube root.
+#[inline]
+pub fn cbrt(x: f64) -> f64 {
+    libm::cbrt(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn they_agree_with_the_standard_library_to_an_ulp() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 2.0 * f64::EPSILON * a.abs().max(b.abs());
+        for i in 1..2000 {
+            let x = f64::from(i) * 0.001_7;
+            let s = (x * 0.5).min(1.0);
+            assert!(close(sin(x), x.sin()) && close(cos(x), x.cos()), "{x}");
+            assert!(close(asin(s), s.asin()) && close(acos(s), s.acos()), "{s}");
+            assert!(close(atan2(x, 1.0 - x), x.atan2(1.0 - x)), "{x}");
+            assert!(close(log2(x), x.log2()) && close(cbrt(x), x.cbrt()), "{x}");
+        }
+        assert_eq!(log2(8.0), 3.0);
+        assert_eq!(cbrt(27.0), 3.0);
+    }
+}
