@@ -229,6 +229,31 @@ mod tests {
     }
 
     #[test]
+    fn a_dropped_npy_grid_is_the_same_as_the_shape_it_samples() {
+        let (shape, _) = samples(&Input::Shape {
+            name: "two-tori".into(),
+            cells: 10,
+        })
+        .expect("a built-in shape");
+        let mut npy = Vec::new();
+        rfta_io::write_npy_f64(&mut npy, &[11, 11, 11], shape.values()).expect("in memory");
+        let dropped = run(&Input::Npy(npy)).expect("reconstructs");
+        let built_in = run(&Input::Shape {
+            name: "two-tori".into(),
+            cells: 10,
+        })
+        .expect("too");
+        assert_eq!(mesh_hash(&dropped.mesh), mesh_hash(&built_in.mesh));
+        assert_eq!(dropped.summary["rfta"]["genus"], 2);
+        assert!(
+            dropped.summary["input"]
+                .as_str()
+                .unwrap_or("")
+                .contains("npy grid")
+        );
+    }
+
+    #[test]
     fn bad_requests_are_errors_that_say_why() {
         let shape = |name: &str, cells| Input::Shape {
             name: name.into(),
