@@ -114,10 +114,12 @@ impl Codec {
             Self::Lz4 => lz4_flex::block::decompress_into(input, out)
                 .map_err(|e| bad(format!("LZ4 stream: {e}")))?,
             Self::Zlib => {
-                let v = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(input, out.len())
-                    .map_err(|e| bad(format!("zlib stream: {:?}", e.status)))?;
-                out[..v.len()].copy_from_slice(&v);
-                v.len()
+                out.copy_from_slice(&super::inflate(
+                    input,
+                    out.len(),
+                    "a blosc chunk's zlib stream",
+                )?);
+                out.len()
             }
         };
         if n == out.len() {

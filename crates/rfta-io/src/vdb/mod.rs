@@ -324,6 +324,21 @@ fn coord(v: &[u8]) -> Option<[i32; 3]> {
     b.coord("").ok()
 }
 
+/// A zlib stream (a zipped block, or a Blosc stream of the zlib codec) that must hold exactly
+/// `nbytes`; `what` names it in the error.
+fn inflate(packed: &[u8], nbytes: usize, what: &str) -> ParseResult<Vec<u8>> {
+    let v = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(packed, nbytes)
+        .map_err(|e| ParseError::new(format!("invalid {what}: {:?}", e.status)))?;
+    if v.len() == nbytes {
+        Ok(v)
+    } else {
+        Err(ParseError::new(format!(
+            "{what} holds {} bytes where {nbytes} were expected",
+            v.len()
+        )))
+    }
+}
+
 /// Skips the file's metadata (a count, then name, type, size and value of each entry).
 fn skip_metadata(b: &mut Bytes<'_>) -> ParseResult<()> {
     let count = b.u32("the file's metadata")?;

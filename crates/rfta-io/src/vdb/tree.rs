@@ -362,7 +362,7 @@ fn data(b: &mut Bytes<'_>, s: Storage, count: usize) -> ParseResult<Vec<f64>> {
             if s.compression & BLOSC != 0 {
                 blosc::decompress(packed, nbytes)?.into()
             } else {
-                inflate(packed, nbytes)?.into()
+                super::inflate(packed, nbytes, "a zip block")?.into()
             }
         }
     } else {
@@ -382,18 +382,4 @@ fn data(b: &mut Bytes<'_>, s: Storage, count: usize) -> ParseResult<Vec<f64>> {
             .map(|c| f64::from_le_bytes(std::array::from_fn(|i| c[i])))
             .collect(),
     })
-}
-
-/// A zlib stream (OpenVDB's `COMPRESS_ZIP`) that must hold exactly `nbytes`.
-fn inflate(packed: &[u8], nbytes: usize) -> ParseResult<Vec<u8>> {
-    let v = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(packed, nbytes)
-        .map_err(|e| ParseError::new(format!("invalid zip block: {:?}", e.status)))?;
-    if v.len() == nbytes {
-        Ok(v)
-    } else {
-        Err(ParseError::new(format!(
-            "a zip block holds {} bytes where {nbytes} were expected",
-            v.len()
-        )))
-    }
 }
