@@ -227,7 +227,7 @@ fn transport_by_halving(
         return a;
     }
     let chord = ((a - q).length() / (2.0 * s.radius)).min(1.0);
-    let mut arc = (params.tau / s.radius).min(2.0 * chord.asin()) * s.radius;
+    let mut arc = (params.tau / s.radius).min(2.0 * rfta_geom::math::asin(chord)) * s.radius;
     for _ in 0..params.halvings {
         let y = rfta_geom::kernels::transport_on_sphere(&s, a, q, arc);
         if min_clearance(spheres, i, y) >= -params.tol {
