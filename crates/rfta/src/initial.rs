@@ -1,5 +1,7 @@
-//! Steps 2 and 3: empty space next to the spheres of each sign (rasterization), and one feasible
-//! tangency point per sphere from it.
+//! Steps 2 and 3: empty space next to the spheres of each sign, and one feasible tangency point
+//! per sphere from it. On grids the empty space is the closest surface point each sample's
+//! gradient points to, where it lies outside the sign's other spheres
+//! ([`crate::InitialPoints::Gradient`]); otherwise the rasterization of the paper.
 
 use std::time::Instant;
 
@@ -11,6 +13,10 @@ use crate::normalize::UnitBox;
 use crate::params::Seeds;
 use crate::report::{InitialReport, Journal, counted};
 use crate::{Error, Params, Result, Stage};
+
+/// With [`crate::InitialPoints::Gradient`], a sign set is rasterized all the same when none or
+/// fewer than one in this many of its drawn spheres gives an empty-space point.
+const GRADIENT_FLOOR: usize = 100;
 
 /// The initial tangency points, one sign set at a time: rasterize the set's spheres, take the
 /// nearest empty-space sample to each centre, make it feasible against a batch of the same set.
@@ -69,18 +75,48 @@ fn drawing(
             .collect();
         let c: Vec<DVec3> = draw.iter().map(|&i| unit.centers[i]).collect();
         let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
-        let raster = params.raster_params(res, negative);
         crate::pool::waiters_back();
         let t_raster = Instant::now();
-        let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
-        if draw.len() < set.len() {
-            // Where the drawn spheres end and the larger ones would begin.
-            empty
-                .points
-                .retain(|&w| unit.nearest_sample(w).is_none_or(drawn));
-        }
+        let from_gradient = match params.initial {
+            crate::InitialPoints::Gradient => unit
+                .gradient_points(set, |i| drawn(i) && unit.spheres[i].radius < unit.clamp)
+                .map(|points| {
+                    // Empty space: the points outside every drawn sphere of the set.
+                    let all = SphereTree::with_indices(
+                        &unit.spheres,
+                        &draw.iter().map(|&i| i as u32).collect::<Vec<_>>(),
+                    );
+                    let tol = params.tolerance;
+                    use rayon::prelude::*;
+                    points
+                        .into_par_iter()
+                        .filter(|&q| !all.inside_any(q, -tol, None))
+                        .collect::<Vec<_>>()
+                })
+                // Values that are not a distance near the surface (a lone sample of one sign
+                // among the other's) leave the gradients little empty space: rasterize then.
+                .filter(|p| !p.is_empty() && p.len() * GRADIENT_FLOOR >= draw.len()),
+            crate::InitialPoints::Raster => None,
+        };
+        let empty_points = match from_gradient {
+            Some(points) => {
+                report.raster_resolution = 0;
+                points
+            }
+            None => {
+                let raster = params.raster_params(res, negative);
+                let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+                if draw.len() < set.len() {
+                    // Where the drawn spheres end and the larger ones would begin.
+                    empty
+                        .points
+                        .retain(|&w| unit.nearest_sample(w).is_none_or(drawn));
+                }
+                empty.points
+            }
+        };
         raster_time += t_raster.elapsed();
-        report.empty_space_points += empty.points.len();
+        report.empty_space_points += empty_points.len();
         let batch = draw_batch(
             set,
             params.batch_size,
@@ -93,7 +129,7 @@ fn drawing(
                 &unit.spheres,
                 values,
                 set,
-                &empty.points,
+                &empty_points,
                 &tree,
                 &fparams,
                 Some(done),
@@ -172,7 +208,10 @@ mod tests {
             .map(|i| torus.sdf(grid.position(i)))
             .collect();
         let samples = SdfSamples::grid(grid, values).expect("samples");
-        let params = Params::default();
+        let params = Params {
+            initial: crate::InitialPoints::Raster,
+            ..Params::default()
+        };
         let unit = UnitBox::new(&samples, None, None);
         let reach = unit.raster_radius(&params);
         let undrawn = unit.spheres.iter().filter(|s| s.radius >= reach).count();
@@ -188,5 +227,41 @@ mod tests {
         assert_eq!(near.owners, all.owners);
         assert_eq!(near.points, all.points);
         assert_ne!(run(unit.owner_radius(&params)).points, all.points);
+    }
+
+    /// On a grid of a torus's exact SDF (41^3, spacing 0.05), the point each sample near the
+    /// surface's gradient points to is the closest surface point up to the central difference's
+    /// error: on the torus within 2% of a spacing, for every sample within 2 spacings.
+    #[test]
+    fn the_gradient_points_lie_on_the_surface() {
+        let h = 0.05;
+        let grid = Grid::cube(40, -1.0, 1.0).expect("grid");
+        let torus = rfta_testkit::Analytic::Torus {
+            major: 0.5,
+            minor: 0.2,
+        };
+        let values: Vec<f64> = (0..grid.len())
+            .map(|i| torus.sdf(grid.position(i)))
+            .collect();
+        let near: Vec<u32> = (0..grid.len() as u32)
+            .filter(|&i| values[i as usize].abs() < 2.0 * h)
+            .collect();
+        let samples = SdfSamples::grid(grid, values).expect("samples");
+        let unit = UnitBox::new(&samples, None, None);
+        let points = unit.gradient_points(&near, |_| true).expect("a grid");
+        assert_eq!(points.len(), near.len());
+        let worst = points
+            .iter()
+            .map(|&q| torus.sdf(unit.to_input(q)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 0.02 * h, "{worst}");
+        // Scattered samples have no grid to take differences on.
+        let scattered =
+            SdfSamples::scattered(samples.positions(), samples.values().to_vec()).expect("ok");
+        assert!(
+            UnitBox::new(&scattered, None, None)
+                .gradient_points(&near, |_| true)
+                .is_none()
+        );
     }
 }

@@ -142,6 +142,47 @@ impl UnitBox {
         RASTER_REACH * self.owner_radius(params)
     }
 
+    /// On a grid, for each sample of `set` that `keep` takes, the point its gradient points to
+    /// from its value away: `c - s g / |g|`, with `g` the central difference of the values (one
+    /// sided at the grid's faces); for an exact SDF the closest surface point. `None` for
+    /// scattered samples. Samples whose difference vanishes are skipped.
+    pub(crate) fn gradient_points(
+        &self,
+        set: &[u32],
+        keep: impl Fn(usize) -> bool + Sync,
+    ) -> Option<Vec<DVec3>> {
+        use rayon::prelude::*;
+        let g = self.grid.as_ref()?;
+        let dims = g.dims();
+        let h = g.spacing();
+        let points = set
+            .par_iter()
+            .map(|&i| i as usize)
+            .filter(|&i| keep(i))
+            .filter_map(|i| {
+                let ijk = [
+                    i / (dims[1] * dims[2]),
+                    (i / dims[2]) % dims[1],
+                    i % dims[2],
+                ];
+                let mut grad = DVec3::ZERO;
+                for a in 0..3 {
+                    let (mut lo, mut hi) = (ijk, ijk);
+                    lo[a] = lo[a].saturating_sub(1);
+                    hi[a] = (hi[a] + 1).min(dims[a] - 1);
+                    if hi[a] == lo[a] {
+                        continue;
+                    }
+                    let v = |q: [usize; 3]| self.values[g.index(q[0], q[1], q[2])];
+                    grad[a] = (v(hi) - v(lo)) / ((hi[a] - lo[a]) as f64 * h[a]);
+                }
+                let len = grad.length();
+                (len > 1e-12).then(|| self.centers[i] - self.values[i] * grad / len)
+            })
+            .collect();
+        Some(points)
+    }
+
     /// The sample nearest to a unit-box point, on grids.
     pub(crate) fn nearest_sample(&self, p: DVec3) -> Option<usize> {
         let g = self.grid.as_ref()?;

@@ -100,6 +100,26 @@ pub struct Params {
     /// point in each such gap kept outside ([`rfta_repair::cavity_openings`]). A cavity walled in
     /// by inside samples all round (a hollow ball) is kept either way. Scattered samples: kept.
     pub keep_cavities: bool,
+    /// Where the initial tangency points come from: on grids, by default, the closest surface
+    /// point each sample's gradient points to ([`InitialPoints::Gradient`]); the paper's
+    /// rasterized empty space ([`InitialPoints::Raster`], always for scattered samples).
+    pub initial: InitialPoints,
+}
+
+/// The source of the initial tangency points ([`Params::initial`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InitialPoints {
+    /// On grids, for each sample `p` near the surface, `p - s grad S / |grad S|` (central
+    /// differences of the grid's values): for an exact SDF the closest surface point, which
+    /// touches the sample's sphere. Those outside every other sphere of the sign are the empty
+    /// space the initial points start from, in place of a raster of the whole box (issue 41).
+    /// Scattered samples are rasterized.
+    #[default]
+    Gradient,
+    /// The paper's: rasterize each sign's spheres, take the empty-space sample nearest to each
+    /// centre (steps 2 and 3).
+    Raster,
 }
 
 impl Default for Params {
@@ -125,6 +145,7 @@ impl Default for Params {
             min_island: 2.0,
             genus: None,
             keep_cavities: false,
+            initial: InitialPoints::Gradient,
         }
     }
 }

@@ -181,7 +181,7 @@ pub struct InitialReport {
     pub negative: usize,
     /// Samples with `s >= 0`.
     pub non_negative: usize,
-    /// Rasterization resolution used.
+    /// Rasterization resolution used (0: none, the empty space came from the gradients).
     pub raster_resolution: usize,
     /// Empty-space points sampled (both signs).
     pub empty_space_points: usize,

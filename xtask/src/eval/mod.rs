@@ -155,6 +155,9 @@ fn parse(args: &[String]) -> Result<Args> {
             "--keep-cavities" => {
                 a.tuning.insert("keep_cavities".into(), true.into());
             }
+            "--initial" => {
+                a.tuning.insert("initial".into(), value()?.clone().into());
+            }
             "--quick" => a.quick = true,
             "--scenario" => {
                 for name in value()?.split(',').map(str::trim) {
