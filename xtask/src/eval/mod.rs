@@ -137,7 +137,7 @@ fn parse(args: &[String]) -> Result<Args> {
                 }
             }
             "--samples" => a.samples = value()?.parse().context("--samples takes a number")?,
-            "--depth" | "--owner-band" | "--raster-resolution" | "--raster-res" => {
+            "--depth" | "--owner-band" | "--raster-resolution" | "--raster-res" | "--rounds" => {
                 let name = match flag.as_str() {
                     "--raster-res" => "raster_resolution".to_string(),
                     flag => flag.trim_start_matches('-').replace('-', "_"),
