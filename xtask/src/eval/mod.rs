@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper,rfta-genus]
-//!                  [--samples N] [--depth D] [--owner-band K] [--raster-resolution R] [--quick]
+//!                  [--samples N] [--depth D] [--owner-band K] [--raster-resolution R] [--rounds R]
+//!                  [--initial gradient|raster] [--keep-cavities] [--quick]
 //!                  [--out DIR]
 //! cargo xtask eval --scenario noise,clamp,scattered,swept,collision,params [--levels L,..] [--inputs DIR] [--quick]
 //! ```
