@@ -157,6 +157,22 @@ pub(crate) struct Tuning {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
     #[serde(skip_serializing_if = "Option::is_none")]
     depth: Option<u32>,
+    /// Where the initial tangency points come from on a grid: the closest surface points the
+    /// samples' gradients point to (the default), or the paper's rasterized empty space.
+    /// Scattered samples are always rasterized.
+    #[arg(long, value_enum)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    initial: Option<Initial>,
+}
+
+/// `--initial`: `rfta::InitialPoints` by its serde names.
+#[derive(Debug, Clone, Copy, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum Initial {
+    /// From the samples' gradients (grids).
+    Gradient,
+    /// The paper's rasterized empty space.
+    Raster,
 }
 
 /// The command-line name of a preset.

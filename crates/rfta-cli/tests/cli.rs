@@ -476,3 +476,35 @@ fn no_output_has_an_unreferenced_vertex() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--initial raster` reaches the pipeline: on a grid the default takes the empty space from the
+/// samples' gradients (no raster: resolution 0 in the report), the paper's rasterizes it.
+#[test]
+fn initial_points_from_the_gradients_or_the_raster() {
+    let dir = temp("initial");
+    let npy = dir.join("t.npy");
+    let o = rfta(&["sample", "--shape", "torus", "--res", "12", "-o", s(&npy)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let resolution = |extra: &[&str]| {
+        let (mesh, report) = (dir.join("m.ply"), dir.join("r.json"));
+        let mut args = vec![
+            "-q",
+            "reconstruct",
+            s(&npy),
+            "-o",
+            s(&mesh),
+            "--report",
+            s(&report),
+        ];
+        args.extend_from_slice(extra);
+        let o = rfta(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&report).expect("report")).expect("json");
+        r["raster_resolution"].as_u64().expect("a figure")
+    };
+    assert_eq!(resolution(&[]), 0);
+    assert_eq!(resolution(&["--initial", "gradient"]), 0);
+    assert!(resolution(&["--initial", "raster"]) >= 64);
+    let _ = std::fs::remove_dir_all(&dir);
+}

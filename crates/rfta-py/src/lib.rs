@@ -135,9 +135,12 @@ fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::P
             serde_json::Number::from_f64(x)
                 .ok_or_else(|| PyValueError::new_err(format!("{key}: {x} is not finite")))?
                 .into()
+        } else if let Ok(text) = value.extract::<String>() {
+            // A named choice (`initial`); `with_options` says which names it takes.
+            text.into()
         } else {
             return Err(PyValueError::new_err(format!(
-                "{key}: {} is not a number or a bool",
+                "{key}: {} is not a number, a bool or a name",
                 value.repr()?
             )));
         };

@@ -411,3 +411,11 @@ def test_read_sdf_names_what_it_cannot_read():
         rfta.read_sdf(os.path.join(VDB, "missing.vdb"))
     s = rfta.read_sdf(os.path.join(VDB, "three.vdb"), grid="ball")
     assert s.S.ndim == 3 and s.clamp > 0
+
+
+def test_initial_points_from_the_gradients_or_the_raster():
+    S = torus_sdf(grid(12))
+    assert rfta.reconstruct(S, preset="fast").report["raster_resolution"] == 0
+    assert rfta.reconstruct(S, preset="fast", initial="raster").report["raster_resolution"] >= 64
+    with pytest.raises(ValueError, match="initial"):
+        rfta.reconstruct(S, preset="fast", initial="teapot")

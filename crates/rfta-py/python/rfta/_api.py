@@ -229,6 +229,7 @@ def reconstruct(
     min_island: Optional[float] = None,
     genus: Optional[int] = None,
     keep_cavities: bool = False,
+    initial: Optional[str] = None,
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
     verbose: bool = False,
@@ -250,11 +251,13 @@ def reconstruct(
     points : (n, 3) array, optional
         Scattered sample positions (``S`` then has shape (n,)).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
-    raster_resolution, min_island, genus, keep_cavities, threads
+    raster_resolution, min_island, genus, keep_cavities, initial, threads
         ``rfta::Params``' settings of these names (its serde form, the one table of names).
         ``rfta reconstruct``'s options (``rfta reconstruct --help``) are the same with dashes
         (``--max-points-per-sphere``, ``--owner-band``), except ``screening``, which has no
         option (the CLI keeps the preset's), and ``threads`` (the global ``rfta --threads``).
+        ``initial``: ``"gradient"`` (on grids, the default: the initial points from the samples'
+        gradients) or ``"raster"`` (the paper's rasterized empty space).
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
     progress : callable(stage, done, of), optional
@@ -291,6 +294,7 @@ def reconstruct(
         min_island=min_island,
         genus=genus,
         keep_cavities=keep_cavities,
+        initial=initial,
         threads=threads,
     )
     V, F, P, N, report = _run(
