@@ -81,6 +81,8 @@ fn every_reconstruct_option_reaches_the_rows() {
         "--genus",
         "0",
         "--keep-cavities",
+        "--initial",
+        "raster",
     ])
     .expect("options");
     let mut given: Vec<String> = cli.args.checks.to_args(None);
