@@ -73,8 +73,6 @@ fn drawing(
             .map(|&i| i as usize)
             .filter(|&i| drawn(i))
             .collect();
-        let c: Vec<DVec3> = draw.iter().map(|&i| unit.centers[i]).collect();
-        let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
         crate::pool::waiters_back();
         let t_raster = Instant::now();
         let from_gradient = match params.initial {
@@ -104,6 +102,8 @@ fn drawing(
                 points
             }
             None => {
+                let c: Vec<DVec3> = draw.iter().map(|&i| unit.centers[i]).collect();
+                let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
                 let raster = params.raster_params(res, negative);
                 let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
                 if draw.len() < set.len() {
@@ -193,21 +193,27 @@ mod tests {
     use super::*;
     use rfta_geom::{Grid, SdfSamples};
 
+    const TORUS: rfta_testkit::Analytic = rfta_testkit::Analytic::Torus {
+        major: 0.5,
+        minor: 0.2,
+    };
+
+    /// [`TORUS`]'s exact SDF on the 41^3 grid over [-1, 1]^3 (spacing 0.05).
+    fn torus_values() -> Vec<f64> {
+        let grid = Grid::cube(40, -1.0, 1.0).expect("grid");
+        (0..grid.len())
+            .map(|i| TORUS.sdf(grid.position(i)))
+            .collect()
+    }
+
     /// A torus (radii 0.5 and 0.2) on a 41^3 grid over [-1, 1]^3: spacing 0.05, so spheres from
     /// 0.45 on (9 spacings, 3 owner radii) are not drawn, a third of the samples. The initial
     /// points are the same as with every sphere drawn, and with spheres up to 1 owner radius
     /// drawn they are not.
     #[test]
     fn drawing_the_near_spheres_gives_the_points_of_drawing_all() {
-        let grid = Grid::cube(40, -1.0, 1.0).expect("grid");
-        let torus = rfta_testkit::Analytic::Torus {
-            major: 0.5,
-            minor: 0.2,
-        };
-        let values: Vec<f64> = (0..grid.len())
-            .map(|i| torus.sdf(grid.position(i)))
-            .collect();
-        let samples = SdfSamples::grid(grid, values).expect("samples");
+        let samples = SdfSamples::grid(Grid::cube(40, -1.0, 1.0).expect("grid"), torus_values())
+            .expect("samples");
         let params = Params {
             initial: crate::InitialPoints::Raster,
             ..Params::default()
@@ -236,13 +242,7 @@ mod tests {
     fn the_gradient_points_lie_on_the_surface() {
         let h = 0.05;
         let grid = Grid::cube(40, -1.0, 1.0).expect("grid");
-        let torus = rfta_testkit::Analytic::Torus {
-            major: 0.5,
-            minor: 0.2,
-        };
-        let values: Vec<f64> = (0..grid.len())
-            .map(|i| torus.sdf(grid.position(i)))
-            .collect();
+        let values = torus_values();
         let near: Vec<u32> = (0..grid.len() as u32)
             .filter(|&i| values[i as usize].abs() < 2.0 * h)
             .collect();
@@ -252,7 +252,7 @@ mod tests {
         assert_eq!(points.len(), near.len());
         let worst = points
             .iter()
-            .map(|&q| torus.sdf(unit.to_input(q)).abs())
+            .map(|&q| TORUS.sdf(unit.to_input(q)).abs())
             .fold(0.0, f64::max);
         assert!(worst < 0.02 * h, "{worst}");
         // Scattered samples have no grid to take differences on.
