@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{rfta, s, stderr, temp};
+use common::{json, rfta, s, stderr, temp};
 use rfta_io::read_sdf;
 
 /// `rfta sample gt.obj --res 20` reproduces the reference grid (libigl's exact distance and
@@ -323,8 +323,7 @@ fn two_dimensional_input_gives_polylines() {
         s(&points),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&report).expect("report")).expect("json");
+    let json = json(&report);
     assert_eq!(json["components"], 1);
     assert_eq!(json["watertight"], true);
     assert_eq!(json["samples"], 441);
@@ -466,8 +465,7 @@ fn no_output_has_an_unreferenced_vertex() {
                 path.display()
             );
         }
-        let json: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(&report).expect("report")).expect("json");
+        let json = json(&report);
         removed += json["islands_removed"].as_u64().expect("islands_removed");
     }
     assert!(
@@ -499,8 +497,7 @@ fn initial_points_from_the_gradients_or_the_raster() {
         args.extend_from_slice(extra);
         let o = rfta(&args);
         assert!(o.status.success(), "{}", stderr(&o));
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(&report).expect("report")).expect("json");
+        let r = json(&report);
         r["raster_resolution"].as_u64().expect("a figure")
     };
     assert_eq!(resolution(&[]), 0);

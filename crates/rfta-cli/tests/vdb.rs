@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{rfta, s, stderr, temp};
+use common::{json, rfta, s, stderr, temp};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -16,9 +16,7 @@ fn data(name: &str) -> PathBuf {
 
 /// `box.npy` with a sidecar from OpenVDB's origin and voxel size, in `dir`; and the background.
 fn clamped_twin(dir: &Path) -> (PathBuf, f64) {
-    let twin: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(data("box.twin.json")).expect("test data"))
-            .expect("test data");
+    let twin = json(&data("box.twin.json"));
     let npy = dir.join("box.npy");
     std::fs::copy(data("box.npy"), &npy).expect("test data");
     let side = serde_json::json!({"origin": twin["origin"], "spacing": twin["spacing"]});
