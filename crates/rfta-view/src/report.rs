@@ -30,25 +30,34 @@ impl Found {
         mesh: &TriMesh,
         clamp: Option<f64>,
     ) -> Result<Self, rfta::Error> {
-        let marked = rfta::consistency::marked(samples, mesh, clamp)?;
         Ok(Self {
-            wrong_side: marked
-                .wrong_side
-                .iter()
-                .map(|&i| samples.position(i))
-                .collect(),
-            entered: marked
-                .entered
-                .iter()
-                .map(|&i| samples.position(i))
-                .collect(),
-            thin_loops: marked.thin_loops,
             compare: samples.as_grid().map(|grid| {
                 (
                     "marching cubes (same samples)".to_string(),
                     rfta_mc::marching_cubes(grid, samples.values(), 0.0),
                 )
             }),
+            ..Self::marks(samples, mesh, clamp)?
+        })
+    }
+
+    /// [`Found::of`] without a mesh to compare with (feature `samples`): for a caller that has
+    /// its own.
+    ///
+    /// # Errors
+    /// As `rfta::consistency::marked`.
+    pub fn marks(
+        samples: &rfta_geom::SdfSamples,
+        mesh: &TriMesh,
+        clamp: Option<f64>,
+    ) -> Result<Self, rfta::Error> {
+        let marked = rfta::consistency::marked(samples, mesh, clamp)?;
+        let at = |i: &[usize]| i.iter().map(|&i| samples.position(i)).collect();
+        Ok(Self {
+            wrong_side: at(&marked.wrong_side),
+            entered: at(&marked.entered),
+            thin_loops: marked.thin_loops,
+            compare: None,
         })
     }
 }

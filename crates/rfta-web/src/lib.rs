@@ -129,10 +129,14 @@ pub fn run(input: &Input) -> Result<Outcome, String> {
     let mc = rfta_mc::marching_cubes(&grid, samples.values(), 0.0);
     let mc_ms = t.elapsed().as_secs_f64() * 1e3;
     let clamp = out.report.input.clamp;
-    let found = Found::of(&samples, &out.mesh, clamp).map_err(|e| e.to_string())?;
+    // Each page shows the other method's mesh as a hidden layer.
+    let found = Found {
+        compare: Some(("marching cubes (same samples)".into(), mc.clone())),
+        ..Found::marks(&samples, &out.mesh, clamp).map_err(|e| e.to_string())?
+    };
     let mc_found = Found {
         compare: Some(("rfta (same samples)".into(), out.mesh.clone())),
-        ..Found::of(&samples, &mc, clamp).map_err(|e| e.to_string())?
+        ..Found::marks(&samples, &mc, clamp).map_err(|e| e.to_string())?
     };
     let figures = |mesh: &TriMesh, f: &Found, ms: f64| {
         let t = rfta_mesh::Topology::of(mesh);
