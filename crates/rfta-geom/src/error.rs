@@ -65,6 +65,9 @@ pub enum Error {
     /// A grid description is unusable.
     #[error("invalid grid: {0}")]
     InvalidGrid(String),
+    /// A stated sample spacing is not positive and finite.
+    #[error("the sample spacing must be positive and finite, not {0}")]
+    InvalidSpacing(f64),
     /// A triangle refers to a vertex that does not exist.
     #[error("face {face} refers to vertex {vertex}, but the mesh has only {n_vertices} vertices")]
     FaceIndexOutOfRange {

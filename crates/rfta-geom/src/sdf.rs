@@ -243,6 +243,9 @@ impl SignBalance {
 pub struct SdfSamples {
     layout: Layout,
     values: Vec<f64>,
+    /// The spacing the caller states ([`SdfSamples::with_spacing`]), in place of the one the
+    /// layout gives.
+    stated_spacing: Option<f64>,
 }
 
 impl SdfSamples {
@@ -266,6 +269,7 @@ impl SdfSamples {
         Ok(Self {
             layout: Layout::Grid(grid),
             values,
+            stated_spacing: None,
         })
     }
 
@@ -300,6 +304,7 @@ impl SdfSamples {
         Ok(Self {
             layout: Layout::Scattered(positions),
             values,
+            stated_spacing: None,
         })
     }
 
@@ -360,10 +365,33 @@ impl SdfSamples {
         }
     }
 
-    /// The sample spacing `h` every margin and resolution in rfta is stated in: the grid spacing
-    /// (its largest axis), or for scattered samples the side of a cube holding one sample on
-    /// average over their bounding box (the spacing of a grid with as many samples in that box).
+    /// These samples with the spacing `h` stated by the caller, for samples whose density varies
+    /// by design (an adaptive sampler's: a coarse lattice far from the surface, a fine one near
+    /// it), where the average over the box would describe neither.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSpacing`] unless `h` is positive and finite.
+    pub fn with_spacing(mut self, h: f64) -> Result<Self> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::InvalidSpacing(h));
+        }
+        self.stated_spacing = Some(h);
+        Ok(self)
+    }
+
+    /// The spacing stated with [`SdfSamples::with_spacing`], if any.
+    pub fn stated_spacing(&self) -> Option<f64> {
+        self.stated_spacing
+    }
+
+    /// The sample spacing `h` every margin and resolution in rfta is stated in: the one stated
+    /// with [`SdfSamples::with_spacing`]; otherwise the grid spacing (its largest axis), or for
+    /// scattered samples the side of a cube holding one sample on average over their bounding box
+    /// (the spacing of a grid with as many samples in that box).
     pub fn spacing(&self) -> f64 {
+        if let Some(h) = self.stated_spacing {
+            return h;
+        }
         match &self.layout {
             Layout::Grid(g) => g.spacing().max_element(),
             Layout::Scattered(_) => {

@@ -43,6 +43,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod adaptive;
 pub mod check;
 pub mod consistency;
 mod finish;
@@ -146,6 +147,27 @@ pub enum Error {
     /// The caller's cancel flag was set ([`reconstruct_cancellable`]).
     #[error("cancelled")]
     Cancelled,
+    /// The SDF oracle of an adaptive run failed ([`adaptive::reconstruct_adaptive`]); `source`
+    /// is its own error.
+    #[error("the SDF failed on batch {batch}: {source}")]
+    Oracle {
+        /// The batch, counted from 1.
+        batch: usize,
+        /// The oracle's error.
+        source: adaptive::OracleError,
+    },
+    /// The SDF oracle of an adaptive run answered a batch with the wrong number of values or a
+    /// value that is not finite.
+    #[error("the SDF's answer to batch {batch} is unusable: {reason}")]
+    OracleAnswer {
+        /// The batch, counted from 1.
+        batch: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// Samples could not be assembled (an adaptive run's, before its reconstruction).
+    #[error("samples: {0}")]
+    Samples(#[from] rfta_geom::Error),
 }
 
 /// Result alias of this crate.

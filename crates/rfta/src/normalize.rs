@@ -275,6 +275,10 @@ pub(crate) fn working_scale(samples: &SdfSamples) -> Option<(SdfSamples, f64)> {
             SdfSamples::scattered(p.iter().map(|&p| p * factor).collect(), values)
         }
     };
+    let scaled = match samples.stated_spacing() {
+        Some(h) => scaled.and_then(|s| s.with_spacing(h * factor)),
+        None => scaled,
+    };
     Some((scaled.ok()?, factor))
 }
 

@@ -23,6 +23,7 @@
 //! `linspace(-1, 1, N + 1)^3` with `rfta sample`'s code. Output: `target/eval/<run>/results.csv`,
 //! `report.md`, `chamfer.svg` and `contact_sheet.png`.
 
+mod adaptive;
 mod plane;
 mod render;
 mod report;
@@ -237,6 +238,10 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         (_, Some(dir)) => load_meshes(dir)?,
         _ => unreachable!("one of them is set above"),
     };
+    if let Ok(b) = std::env::var("RFTA_ADAPTIVE") {
+        let budgets: Vec<usize> = b.split(',').filter_map(|x| x.parse().ok()).collect();
+        return adaptive::run(&shapes, &budgets, a.samples);
+    }
     if a.vdb {
         let res = if a.res_given {
             a.res.clone()

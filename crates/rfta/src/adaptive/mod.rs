@@ -1,0 +1,387 @@
+//! Reconstruction from an SDF that can be asked: the samples chosen where the current
+//! reconstruction is least determined by them, under a budget of evaluations (issue 37).
+//!
+//! [`reconstruct_adaptive`] starts from a coarse grid over the box, reconstructs, then asks the
+//! oracle where the mesh and the function disagree, and refines there:
+//!
+//! 1. the base grid (about a sixth of the budget) is evaluated and reconstructed;
+//! 2. every leaf cell of the octree (`lattice.rs`) that the surface may cross (no corner's empty
+//!    ball holds it) is probed at its centre, coarsest cells first: the function's value there
+//!    against the current mesh's signed distance is the mesh's error at that point, a quantity
+//!    neither the samples nor the reconstruction can tell without asking;
+//! 3. the cells with the largest errors are refined (the 19 points of their subdivision that are
+//!    not known), with the cells whose corners the mesh disagrees with: thin parts the grid
+//!    missed, handles and gaps the coarse samples closed, curved parts, the surface between grid
+//!    points; cells whose probe finds the mesh right are left coarse;
+//! 4. reconstruct and repeat, each pass spending about as many evaluations as all before it
+//!    (the passes' reconstructions cost about twice the last one), until the budget is spent or no
+//!    probed cell is off by more than [`Budget::tolerance`].
+//!
+//! The passes before the last reconstruct with at most [`GUIDE_ROUNDS`] fine-tuning rounds (they
+//! only say where to ask); the last runs the caller's [`Params`]. Every choice is a function of
+//! the values asked for (sorted lattice keys, errors ordered with ties broken by key), so a
+//! deterministic oracle gives the same samples and the same mesh on any number of threads.
+//! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
+
+mod lattice;
+
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use rfta_geom::glam::DVec3;
+use rfta_geom::{Aabb, SdfSamples};
+use rfta_mesh::MeshIndex;
+
+use crate::{Error, Params, Reconstruction, Result, Stage};
+use lattice::{Cell, Lattice};
+
+/// What an oracle's failure carries back: the caller's own error.
+pub type OracleError = Box<dyn std::error::Error + Send + Sync>;
+
+/// The fewest evaluations a budget may allow: the smallest base grid (5^3 points).
+pub const MIN_BUDGET: usize = 125;
+
+/// Fine-tuning rounds of the passes before the last (their meshes only guide the next samples).
+pub const GUIDE_ROUNDS: usize = 3;
+
+/// How much an adaptive run may ask.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Budget {
+    /// The most evaluations of the oracle (at least [`MIN_BUDGET`]).
+    pub evaluations: usize,
+    /// Stop early once no probed cell's error (the function's value at its centre against the
+    /// mesh's signed distance, in the samples' units) exceeds this: nothing left undecided at
+    /// that tolerance. `None`: spend the budget.
+    pub tolerance: Option<f64>,
+}
+
+impl Budget {
+    /// A budget of `evaluations`, spent in full.
+    pub fn evaluations(evaluations: usize) -> Self {
+        Self {
+            evaluations,
+            tolerance: None,
+        }
+    }
+}
+
+/// One pass: what was asked and what it cost.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct Pass {
+    /// Samples the pass reconstructed from.
+    pub samples: usize,
+    /// Cells probed at their centre after the reconstruction.
+    pub probes: usize,
+    /// Cells refined after the probes.
+    pub refined: usize,
+    /// The largest error a probe found (samples' units; 0 before any probe).
+    pub largest_error: f64,
+    /// Leaf cells the surface may still cross whose probe found an error above the tolerance
+    /// (or that were not probed) when the pass ended.
+    pub undecided: usize,
+    /// Seconds in the oracle during the pass.
+    pub oracle_seconds: f64,
+    /// Seconds in rfta's own work during the pass (reconstruction, probes' mesh distances).
+    pub rfta_seconds: f64,
+}
+
+/// The adaptive run's own report, beside the final reconstruction's.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct AdaptiveReport {
+    /// Evaluations of the oracle in all (the final sample count).
+    pub evaluations: usize,
+    /// The budget.
+    pub budget: usize,
+    /// The finest sample spacing reached (near the surface).
+    pub finest_spacing: f64,
+    /// Seconds in the oracle.
+    pub oracle_seconds: f64,
+    /// Seconds in rfta's own work.
+    pub rfta_seconds: f64,
+    /// The passes, in order; the last one's mesh is the result.
+    pub passes: Vec<Pass>,
+}
+
+/// The result of [`reconstruct_adaptive`].
+#[derive(Debug, Clone)]
+pub struct AdaptiveReconstruction {
+    /// The final reconstruction, from every sample asked for.
+    pub reconstruction: Reconstruction,
+    /// The samples asked for, in the order asked (scattered, with the finest spacing stated).
+    pub samples: SdfSamples,
+    /// Evaluations, passes and the time in the oracle and in rfta.
+    pub report: AdaptiveReport,
+}
+
+/// Reconstructs the surface of the signed distance function `oracle` (negative inside) over
+/// `bounds`, asking it at most `budget.evaluations` times, in batches: `oracle` takes a slice of
+/// points and returns their values, or an error that ends the run.
+///
+/// `progress` hears each stage of each pass's reconstruction, `on_pass` each finished pass;
+/// `cancel` is read between batches and stages.
+///
+/// # Errors
+/// [`Error::InvalidParams`] for a budget under [`MIN_BUDGET`] or an empty or non-finite box;
+/// [`Error::Oracle`] when the oracle fails, [`Error::OracleAnswer`] when it answers with the wrong
+/// number of values or a value that is not finite (nothing is reconstructed from such a batch);
+/// [`Error::Cancelled`]; otherwise as [`crate::reconstruct`].
+pub fn reconstruct_adaptive(
+    oracle: &mut dyn FnMut(&[DVec3]) -> std::result::Result<Vec<f64>, OracleError>,
+    bounds: Aabb,
+    budget: Budget,
+    params: &Params,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    on_pass: &mut dyn FnMut(&Pass),
+    cancel: &AtomicBool,
+) -> Result<AdaptiveReconstruction> {
+    params.validate()?;
+    let extent = bounds.max - bounds.min;
+    if !(bounds.min.is_finite() && bounds.max.is_finite() && extent.min_element() > 0.0) {
+        return Err(Error::InvalidParams(format!(
+            "the box must be finite with positive extent on every axis, not {:?} to {:?}",
+            bounds.min.to_array(),
+            bounds.max.to_array()
+        )));
+    }
+    if budget.evaluations < MIN_BUDGET {
+        return Err(Error::InvalidParams(format!(
+            "the budget must allow at least {MIN_BUDGET} evaluations, not {}",
+            budget.evaluations
+        )));
+    }
+    let mut asker = Asker {
+        oracle,
+        batches: 0,
+        seconds: 0.0,
+        cancel,
+    };
+    let mut lattice = Lattice::new(bounds, base_cells(budget.evaluations));
+    let corners = lattice.missing_corners();
+    if corners.len() > budget.evaluations {
+        return Err(Error::InvalidParams(format!(
+            "a budget of {} evaluations cannot sample a {:?} box's base grid ({} points); give a larger budget or a less elongated box",
+            budget.evaluations,
+            extent.to_array(),
+            corners.len()
+        )));
+    }
+    asker.ask(&mut lattice, &corners)?;
+    let guide = Params {
+        rounds: params.rounds.min(GUIDE_ROUNDS),
+        ..params.clone()
+    };
+    let mut report = AdaptiveReport {
+        budget: budget.evaluations,
+        ..AdaptiveReport::default()
+    };
+    loop {
+        let t = Instant::now();
+        let oracle_before = asker.seconds;
+        let samples = lattice.samples()?;
+        let left = budget.evaluations - lattice.len();
+        // A pass spends about what all before it did: the reconstructions cost about twice the
+        // last one's, and the error halves where it matters at each pass.
+        let spend = left.min(lattice.len().max(MIN_BUDGET));
+        let last = spend < MIN_BUDGET / 5;
+        let rec = crate::reconstruct_cancellable(
+            &samples,
+            if last { params } else { &guide },
+            progress,
+            cancel,
+        )?;
+        let mut pass = Pass {
+            samples: samples.len(),
+            ..Pass::default()
+        };
+        if last {
+            pass.rfta_seconds = t.elapsed().as_secs_f64();
+            report.finish(pass, &lattice, on_pass);
+            return Ok(AdaptiveReconstruction {
+                reconstruction: rec,
+                samples,
+                report,
+            });
+        }
+        let index = MeshIndex::new(&rec.mesh)?;
+        let done = refine_where_wrong(&mut lattice, &index, &mut asker, spend, budget, &mut pass)?;
+        pass.oracle_seconds = asker.seconds - oracle_before;
+        pass.rfta_seconds = t.elapsed().as_secs_f64() - pass.oracle_seconds;
+        let pass_copy = pass.clone();
+        report.passes.push(pass);
+        on_pass(&pass_copy);
+        if done {
+            // Nothing left undecided, or nothing left to refine: the guide's samples are final.
+            let t = Instant::now();
+            let samples = lattice.samples()?;
+            let rec = crate::reconstruct_cancellable(&samples, params, progress, cancel)?;
+            let pass = Pass {
+                samples: samples.len(),
+                rfta_seconds: t.elapsed().as_secs_f64(),
+                ..Pass::default()
+            };
+            report.finish(pass, &lattice, on_pass);
+            return Ok(AdaptiveReconstruction {
+                reconstruction: rec,
+                samples,
+                report,
+            });
+        }
+    }
+}
+
+impl AdaptiveReport {
+    fn finish(&mut self, pass: Pass, lattice: &Lattice, on_pass: &mut dyn FnMut(&Pass)) {
+        on_pass(&pass);
+        self.passes.push(pass);
+        self.evaluations = lattice.len();
+        self.finest_spacing = lattice.finest_spacing();
+        self.oracle_seconds = self.passes.iter().map(|p| p.oracle_seconds).sum();
+        self.rfta_seconds = self.passes.iter().map(|p| p.rfta_seconds).sum();
+    }
+}
+
+/// Cells of the base grid along the box's longest side for a budget: its points about a sixth of
+/// the budget, 4 to 64 cells.
+fn base_cells(evaluations: usize) -> u32 {
+    let per_axis = rfta_geom::math::cbrt(evaluations as f64 / 6.0).floor() - 1.0;
+    per_axis.clamp(4.0, 64.0) as u32
+}
+
+/// The oracle with its bookkeeping: batches counted from 1, the time spent in it, the answers
+/// checked.
+struct Asker<'a> {
+    oracle: &'a mut dyn FnMut(&[DVec3]) -> std::result::Result<Vec<f64>, OracleError>,
+    batches: usize,
+    seconds: f64,
+    cancel: &'a AtomicBool,
+}
+
+impl Asker<'_> {
+    /// Asks for `keys` in one batch and records the answers.
+    fn ask(&mut self, lattice: &mut Lattice, keys: &[[u32; 3]]) -> Result<()> {
+        if keys.is_empty() {
+            return Ok(());
+        }
+        if self.cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(Error::Cancelled);
+        }
+        self.batches += 1;
+        let batch = self.batches;
+        let points: Vec<DVec3> = keys.iter().map(|&k| lattice.position(k)).collect();
+        let t = Instant::now();
+        let answer = (self.oracle)(&points);
+        self.seconds += t.elapsed().as_secs_f64();
+        let values = answer.map_err(|source| Error::Oracle { batch, source })?;
+        if values.len() != points.len() {
+            return Err(Error::OracleAnswer {
+                batch,
+                reason: format!("{} values for {} points", values.len(), points.len()),
+            });
+        }
+        if let Some((i, v)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            let p = points[i];
+            return Err(Error::OracleAnswer {
+                batch,
+                reason: format!(
+                    "the value at point {i} ({}, {}, {}) is {v}",
+                    p.x, p.y, p.z
+                ),
+            });
+        }
+        lattice.insert(keys, &values);
+        Ok(())
+    }
+}
+
+/// Probes the cells the surface may cross and refines those where the mesh is most wrong,
+/// spending at most `spend` evaluations. Returns whether nothing is left to refine (every probe
+/// within the tolerance, or no cell left above the finest level).
+fn refine_where_wrong(
+    lattice: &mut Lattice,
+    index: &MeshIndex,
+    asker: &mut Asker<'_>,
+    spend: usize,
+    budget: Budget,
+    pass: &mut Pass,
+) -> Result<bool> {
+    let candidates: Vec<Cell> = lattice
+        .leaves()
+        .iter()
+        .copied()
+        .filter(|&c| c.level < lattice::FINEST && lattice.may_hold_surface(c))
+        .collect();
+    if candidates.is_empty() {
+        return Ok(true);
+    }
+    // Probes: the centres not known yet, coarsest cells first, at most half the pass.
+    let mut unprobed: Vec<Cell> = candidates
+        .iter()
+        .copied()
+        .filter(|c| lattice.value(c.centre()).is_none())
+        .collect();
+    unprobed.sort_by_key(|c| (c.level, c.corner));
+    unprobed.truncate(spend / 2);
+    let probes: Vec<[u32; 3]> = unprobed.iter().map(|c| c.centre()).collect();
+    asker.ask(lattice, &probes)?;
+    pass.probes = probes.len();
+    // Each candidate's error: at its centre and its corners, the function's value against the
+    // mesh's signed distance. Unprobed cells rank by their corners alone.
+    let points: Vec<[u32; 3]> = {
+        let mut all: Vec<[u32; 3]> = candidates
+            .iter()
+            .flat_map(|c| c.corners().chain(std::iter::once(c.centre())))
+            .filter(|&k| lattice.value(k).is_some())
+            .collect();
+        all.sort_unstable();
+        all.dedup();
+        all
+    };
+    let positions: Vec<DVec3> = points.iter().map(|&k| lattice.position(k)).collect();
+    let mesh_distance = index.signed_distances(&positions);
+    let error_at = |k: [u32; 3]| -> Option<f64> {
+        let i = points.binary_search(&k).ok()?;
+        Some((lattice.value(k)? - mesh_distance[i]).abs())
+    };
+    let mut scored: Vec<(f64, Cell)> = candidates
+        .iter()
+        .filter(|&&c| lattice.may_hold_surface(c))
+        .map(|&c| {
+            let e = c
+                .corners()
+                .chain(std::iter::once(c.centre()))
+                .filter_map(error_at)
+                .fold(0.0, f64::max);
+            (e, c)
+        })
+        .collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    pass.largest_error = scored.first().map_or(0.0, |s| s.0);
+    let tolerance = budget.tolerance.unwrap_or(0.0);
+    let above: Vec<(f64, Cell)> = scored.into_iter().filter(|s| s.0 > tolerance).collect();
+    if above.is_empty() {
+        return Ok(true);
+    }
+    // Refine in order of error while the pass's evaluations last.
+    let mut left = spend.saturating_sub(probes.len());
+    let mut chosen: Vec<Cell> = Vec::new();
+    let mut asked: std::collections::HashSet<[u32; 3]> = std::collections::HashSet::new();
+    for &(_, cell) in &above {
+        let new: Vec<[u32; 3]> = lattice
+            .refinement_points(&[cell])
+            .into_iter()
+            .filter(|k| !asked.contains(k))
+            .collect();
+        if new.len() > left {
+            continue;
+        }
+        left -= new.len();
+        asked.extend(new);
+        chosen.push(cell);
+    }
+    pass.undecided = above.len() - chosen.len();
+    let keys = lattice.refinement_points(&chosen);
+    asker.ask(lattice, &keys)?;
+    lattice.refine(&chosen);
+    pass.refined = chosen.len();
+    Ok(chosen.is_empty())
+}
