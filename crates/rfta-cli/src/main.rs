@@ -7,6 +7,7 @@
 //! `writeln!` (`ui::note`, `info`'s `out!`), so a closed pipe ends the tool quietly instead of
 //! panicking.
 
+mod adaptive;
 mod batch;
 mod info;
 mod paths;

@@ -36,13 +36,22 @@ pub(crate) struct Args {
     /// SDF samples: a grid (.npy, .exr), an OpenVDB level set (.vdb: its background is the
     /// clamp) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
     /// 2D samples are detected: .npy of shape (nx, ny) or (n, 3), .csv rows x y s, 16-bit .png, .exr images.
-    input: PathBuf,
+    #[arg(required_unless_present = "from_mesh")]
+    input: Option<PathBuf>,
+    /// Instead of an SDF file, ask a mesh's exact signed distance where the reconstruction needs
+    /// it (adaptive sampling, at most --budget evaluations; for evaluation and demos).
+    #[arg(long, value_name = "MESH", conflicts_with_all = ["input", "grid"])]
+    pub(crate) from_mesh: Option<PathBuf>,
+    /// With --from-mesh: the most evaluations of the SDF.
+    #[arg(long, value_name = "N", requires = "from_mesh", default_value_t = 30_000)]
+    pub(crate) budget: usize,
     /// Output mesh (.obj .ply .stl .glb); for 2D input, polylines (.obj .svg .csv).
     #[arg(short, long)]
-    output: PathBuf,
-    /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`).
+    pub(crate) output: PathBuf,
+    /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`); with --from-mesh,
+    /// the box sampled (default: the mesh's box grown by a tenth of its longest side).
     #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = parse_bounds)]
-    bounds: Option<rfta_io::GridBounds>,
+    pub(crate) bounds: Option<rfta_io::GridBounds>,
     /// The level set of a .vdb file to reconstruct, by name (default: the first level set).
     #[arg(long, value_name = "NAME")]
     grid: Option<String>,
@@ -50,15 +59,15 @@ pub(crate) struct Args {
     pub(crate) checks: Checks,
     /// Also write the final tangency points with their normals (PLY), e.g. for `rfta psr`.
     #[arg(long, value_name = "PLY")]
-    points: Option<PathBuf>,
+    pub(crate) points: Option<PathBuf>,
     /// Also write the report's key figures as JSON (counts, agreement with the samples, seconds).
     #[arg(long, value_name = "JSON")]
-    report: Option<PathBuf>,
+    pub(crate) report: Option<PathBuf>,
     /// Also write the mesh as one HTML page that opens without a network (an interactive 3D
     /// view with the samples on the wrong side, the spheres entered, thin handles, cavities and
     /// islands marked, marching cubes' mesh of the same grid to compare, the report's figures).
     #[arg(long, value_name = "HTML")]
-    html: Option<PathBuf>,
+    pub(crate) html: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) tuning: Tuning,
 }
@@ -69,16 +78,16 @@ pub(crate) struct Checks {
     /// The SDF was clamped at this magnitude (samples at or beyond it get no tangency point).
     /// Without it a clamp is detected from flat plateaus of the values (see --no-check).
     #[arg(long, value_parser = crate::ui::parse_positive)]
-    clamp: Option<f64>,
+    pub(crate) clamp: Option<f64>,
     /// Do not inspect the values: reconstruct even from samples that are not a signed distance
     /// (occupancy, random, rescaled values; a value beyond the samples' extent), and detect no
     /// clamp.
     #[arg(long)]
-    no_check: bool,
+    pub(crate) no_check: bool,
     /// Refuse inputs whose estimated peak memory exceeds this (e.g. 8G, 512M; default: the
     /// memory available now).
     #[arg(long, value_name = "SIZE", value_parser = crate::ui::parse_size)]
-    max_memory: Option<u64>,
+    pub(crate) max_memory: Option<u64>,
 }
 
 impl Checks {
@@ -222,7 +231,7 @@ impl Tuning {
 }
 
 /// Reconstruct with a progress bar over the stages.
-fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::Reconstruction> {
+pub(crate) fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::Reconstruction> {
     let bar = ui.progress(params.rounds as u64 + 2, "rfta");
     let b = bar.clone();
     let mut label = String::from("initial");
@@ -251,7 +260,7 @@ fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::
     Ok(out?)
 }
 
-fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
+pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     let r = &out.report;
     ui.detail(format!(
         "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; screened Poisson depth {}; points per round {:?}; {} spheres without a point, {} far spheres (constraints only)",
@@ -340,9 +349,12 @@ fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
 }
 
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
+    let Some(input) = args.input.clone() else {
+        return crate::adaptive::from_mesh(&args, ui);
+    };
     let mut files = crate::paths::Files::new();
     files
-        .read_sdf("the input", &args.input)
+        .read_sdf("the input", &input)
         .write("the output (-o)", &args.output);
     if let Some(p) = &args.report {
         files.write("--report", p);
@@ -354,7 +366,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         files.write("--html", p);
     }
     files.check()?;
-    if rfta_io::is_sdf_2d(&args.input)? {
+    if rfta_io::is_sdf_2d(&input)? {
         crate::ui::check_output_2d(&args.output)?;
         let mut params = args.tuning.params()?;
         params.clamp = args.checks.clamp;
@@ -364,7 +376,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             points: args.points.as_deref(),
         };
         return crate::plane::reconstruct(
-            &args.input,
+            &input,
             &args.output,
             args.bounds,
             &params,
@@ -381,11 +393,11 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     params.check = !args.checks.no_check;
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
     // Refuse an oversized grid from its header, before reading the data.
-    if let Some(n) = rfta_io::peek_sdf_len(&args.input)? {
+    if let Some(n) = rfta_io::peek_sdf_len(&input)? {
         rfta::check_memory(n, &params).with_context(|| {
             format!(
                 "{}: refused before reading (the limit is {})",
-                args.input.display(),
+                input.display(),
                 if args.checks.max_memory.is_some() {
                     "--max-memory"
                 } else {
@@ -395,8 +407,8 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         })?;
     }
     let raw = match &args.grid {
-        Some(name) => rfta_io::read_vdb(&args.input, Some(name), args.bounds)?,
-        None => rfta_io::read_sdf(&args.input, args.bounds)?,
+        Some(name) => rfta_io::read_vdb(&input, Some(name), args.bounds)?,
+        None => rfta_io::read_sdf(&input, args.bounds)?,
     };
     // An OpenVDB level set says where it is clamped: its background value.
     if params.clamp.is_none()
@@ -405,7 +417,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         ui.say(format!("clamped at {c} (the level set's background value)"));
         params.clamp = Some(c);
     }
-    let samples = match raw.validate(&args.input) {
+    let samples = match raw.validate(&input) {
         Ok(s) => s,
         Err(rfta_io::Error::Geom {
             source: source @ rfta::geom::Error::NoSignChange { .. },
@@ -419,21 +431,35 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             return no_surface(&args, &e, ui);
         }
         other => {
-            other.with_context(|| format!("{}: reconstruction failed", args.input.display()))?
+            other.with_context(|| format!("{}: reconstruction failed", input.display()))?
         }
     };
     let seconds = t.elapsed().as_secs_f64();
-    describe(&out, ui, seconds);
+    let title = format!("rfta reconstruct {}", input.display());
+    deliver(&args, &out, &samples, seconds, &title, None, ui)
+}
+
+/// What `reconstruct` does with a reconstruction: describe it, write the mesh and what the
+/// options ask for beside it (`extra` joins the report's JSON: an adaptive run's own report).
+pub(crate) fn deliver(
+    args: &Args,
+    out: &rfta::Reconstruction,
+    samples: &SdfSamples,
+    seconds: f64,
+    title: &str,
+    extra: Option<(&str, serde_json::Value)>,
+    ui: &Ui,
+) -> Result<()> {
+    describe(out, ui, seconds);
     write(&args.output, &out.mesh, ui)?;
     if let Some(path) = &args.report {
-        write_report(path, &out, seconds)?;
+        write_report(path, out, seconds, extra)?;
     }
     if let Some(path) = &args.html {
-        let title = format!("rfta reconstruct {}", args.input.display());
         let scene = crate::view::scene(
-            &title,
+            title,
             &out.mesh,
-            Some(&samples),
+            Some(samples),
             out.report.input.clamp,
             rfta_view::report_figures(&out.report),
         )?;
@@ -456,8 +482,16 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
 
 /// The report as one JSON object: [`rfta::Report`]'s serde form, and the mesh's size and the
 /// command's seconds.
-fn write_report(path: &Path, out: &rfta::Reconstruction, seconds: f64) -> Result<()> {
+fn write_report(
+    path: &Path,
+    out: &rfta::Reconstruction,
+    seconds: f64,
+    extra: Option<(&str, serde_json::Value)>,
+) -> Result<()> {
     let mut json = serde_json::to_value(&out.report)?;
+    if let Some((key, value)) = extra {
+        json[key] = value;
+    }
     json["vertices"] = out.mesh.n_vertices().into();
     json["faces"] = out.mesh.n_faces().into();
     json["seconds"] = seconds.into();
@@ -470,13 +504,17 @@ fn no_surface(args: &Args, why: &dyn std::fmt::Display, ui: &Ui) -> Result<()> {
     write(&args.output, &TriMesh::default(), ui)?;
     Err(Exit::no_surface(format!(
         "{}: {why}; wrote an empty mesh to {}",
-        args.input.display(),
+        args.input
+            .as_deref()
+            .or(args.from_mesh.as_deref())
+            .unwrap_or(Path::new("the input"))
+            .display(),
         args.output.display()
     ))
     .into())
 }
 
-fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
+pub(crate) fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
     // `write_mesh` refuses non-finite vertices and writes nothing.
     rfta_io::write_mesh(path, mesh)?;
     ui.say(format!("wrote {}", path.display()));
@@ -499,6 +537,13 @@ pub(crate) struct DemoArgs {
     /// The 2D demo: a shape with a hole against marching squares, one SVG (default demo2d.svg).
     #[arg(long = "2d")]
     two_d: bool,
+    /// Ask the shape's exact SDF where the reconstruction needs it (adaptive sampling) instead of
+    /// sampling a grid.
+    #[arg(long, conflicts_with_all = ["res", "two_d"])]
+    adaptive: bool,
+    /// With --adaptive: the most evaluations of the SDF.
+    #[arg(long, value_name = "N", requires = "adaptive", default_value_t = 10_000)]
+    budget: usize,
     #[command(flatten)]
     tuning: Tuning,
 }
@@ -516,6 +561,9 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
         crate::ui::check_output_2d(&output)?;
     } else {
         crate::ui::check_output(&output)?;
+    }
+    if args.adaptive {
+        return crate::adaptive::demo(&output, args.budget, &args.tuning.params()?, ui);
     }
     let res = args.res.unwrap_or(if args.two_d { 32 } else { 20 });
     if res < 2 {

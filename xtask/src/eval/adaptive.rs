@@ -42,6 +42,9 @@ pub(crate) fn run(shapes: &[Shape], budgets: &[usize], samples: usize) -> Result
                         c.sign_errors, c.entered, c.thin_loops.len(), secs, out.report.rfta_seconds, out.report.oracle_seconds,
                         out.report.passes.iter().map(|p| format!("[{} p{} r{} e{:.4} u{}]", p.samples, p.probes, p.refined, p.largest_error, p.undecided)).collect::<Vec<_>>().join("")
                     );
+                    if std::env::var("RFTA_TIMINGS").is_ok() {
+                        println!("{:?}", out.reconstruction.report.timings);
+                    }
                 }
                 Err(e) => println!("{} b={} error {e}", shape.name, b),
             }
