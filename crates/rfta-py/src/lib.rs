@@ -101,6 +101,7 @@ fn error(e: rfta::Error) -> PyErr {
     match e {
         E::NoSurface { .. } => NoSurfaceError::new_err(e.to_string()),
         E::InvalidParams(_)
+        | E::OracleAnswer { .. }
         | E::NotADistance(_)
         | E::TooLarge { .. }
         | E::TooFewPoints { .. }
@@ -256,6 +257,93 @@ fn reconstruct<'py>(
             report.into_any(),
         ],
     )
+}
+
+/// Reconstructs from an SDF that can be asked (`rfta::adaptive`): `sdf` takes an (n, 3)
+/// float64 array and returns n values (anything `numpy.asarray` takes), asked over `lo`..`hi`
+/// at most `budget` times. The callable runs with the GIL, on the worker thread, only while
+/// it runs; an exception it raises is raised as itself; Ctrl-C stops between batches. Returns
+/// `(V, F, P, N, report, adaptive, positions, values)`.
+#[pyfunction]
+#[pyo3(signature = (sdf, lo, hi, budget, preset="default", options=None, progress=None))]
+#[expect(clippy::too_many_arguments, reason = "the Python wrapper's keywords")]
+fn reconstruct_adaptive<'py>(
+    py: Python<'py>,
+    sdf: Py<PyAny>,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    budget: usize,
+    preset: &str,
+    options: Option<&Bound<'py, PyDict>>,
+    progress: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let params = params(preset, options)?;
+    let bounds = rfta_geom::Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi));
+    // The callable's own exception, kept to be raised as itself.
+    let raised: Mutex<Option<PyErr>> = Mutex::new(None);
+    let out = detached(py, progress, |progress, cancel| {
+        let mut oracle = |points: &[DVec3]| -> Result<Vec<f64>, rfta::adaptive::OracleError> {
+            Python::attach(|py| ask(py, &sdf, points)).map_err(|e| {
+                let message = e.to_string();
+                if let Ok(mut slot) = raised.lock() {
+                    *slot = Some(e);
+                }
+                message.into()
+            })
+        };
+        rfta::adaptive::reconstruct_adaptive(
+            &mut oracle,
+            bounds,
+            rfta::adaptive::Budget::evaluations(budget),
+            &params,
+            progress,
+            &mut |_| {},
+            cancel,
+        )
+    });
+    if let Some(e) = raised.lock().ok().and_then(|mut slot| slot.take()) {
+        return Err(e);
+    }
+    let out = out?;
+    let rec = &out.reconstruction;
+    let (v_f, p, n) = (
+        mesh_arrays(py, &rec.mesh)?,
+        rows(py, &rec.points.points)?,
+        rows(py, &rec.points.normals)?,
+    );
+    let report = report_dict(py, &rec.report, false)?;
+    let text =
+        serde_json::to_string(&out.report).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let adaptive = py.import("json")?.call_method1("loads", (text,))?;
+    let positions = rows(py, &out.samples.positions())?;
+    let values = PyArray1::from_slice(py, out.samples.values());
+    PyTuple::new(
+        py,
+        [
+            v_f.get_item(0)?,
+            v_f.get_item(1)?,
+            p.into_any(),
+            n.into_any(),
+            report.into_any(),
+            adaptive,
+            positions.into_any(),
+            values.into_any(),
+        ],
+    )
+}
+
+/// One batch: the points as an (n, 3) float64 array, the answer through `numpy.asarray` as
+/// float64, flattened.
+fn ask(py: Python<'_>, sdf: &Py<PyAny>, points: &[DVec3]) -> PyResult<Vec<f64>> {
+    let flat: Vec<f64> = points.iter().flat_map(|p| p.to_array()).collect();
+    let array = PyArray1::from_vec(py, flat).reshape([points.len(), 3])?;
+    let answer = sdf.bind(py).call1((array,))?;
+    let numpy = py.import("numpy")?;
+    let values = numpy
+        .call_method1("asarray", (answer, "float64"))?
+        .call_method1("reshape", (-1,))?;
+    let values: PyReadonlyArray1<'_, f64> = values.extract()?;
+    Ok(values.as_slice()?.to_vec())
 }
 
 /// Reconstructs closed polylines from 2D samples: `values` (n,) at `positions` (n, 2), a grid
@@ -575,6 +663,7 @@ fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("NoSurfaceError", m.py().get_type::<NoSurfaceError>())?;
     m.add_function(wrap_pyfunction!(reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(reconstruct_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(reconstruct_2d, m)?)?;
     m.add_function(wrap_pyfunction!(page, m)?)?;
     m.add_function(wrap_pyfunction!(screened_poisson, m)?)?;

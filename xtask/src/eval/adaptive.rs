@@ -23,7 +23,7 @@ pub(crate) fn run(shapes: &[Shape], budgets: &[usize], samples: usize) -> Result
                 &mut oracle,
                 Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
                 rfta::adaptive::Budget::evaluations(b),
-                &rfta::Params::default(),
+                &rfta::Params { spsr_depth: std::env::var("HACK_DEPTH").ok().and_then(|d| d.parse().ok()), ..rfta::Params::default() },
                 &mut |_| {},
                 &mut |_| {},
                 &std::sync::atomic::AtomicBool::new(false),

@@ -158,6 +158,11 @@ class Reconstruction:
     samples: Optional[tuple] = field(default=None, repr=False)
     """The samples it was made from (values, positions, grid), for ``to_html``."""
 
+    adaptive: Optional[dict] = None
+    """With ``sdf=``: the adaptive run's own report (``evaluations``, ``budget``,
+    ``finest_spacing``, ``oracle_seconds`` and ``rfta_seconds`` apart, one entry per pass in
+    ``passes``); ``None`` otherwise. The samples asked for are in ``samples``."""
+
     def to_html(self, path: Optional[str] = None, title: str = "rfta") -> str:
         """The mesh as one HTML page that opens without a network: an interactive 3D view with
         the samples on the wrong side, the spheres entered, thin handles, cavities and islands
@@ -212,11 +217,13 @@ def _run(
 
 
 def reconstruct(
-    S: Any,
+    S: Any = None,
     bounds: Bounds = None,
     preset: str = "default",
     *,
     points: Any = None,
+    sdf: Optional[Callable[[np.ndarray], Any]] = None,
+    budget: Optional[int] = None,
     rounds: Optional[int] = None,
     max_points_per_sphere: Optional[int] = None,
     seed: Optional[int] = None,
@@ -250,6 +257,16 @@ def reconstruct(
         sphere), or gpytoolbox's defaults (3 rounds). The keywords below override it.
     points : (n, 3) array, optional
         Scattered sample positions (``S`` then has shape (n,)).
+    sdf : callable, optional
+        Instead of ``S``: the signed distance function itself, asked where the reconstruction
+        needs it (adaptive sampling) over ``bounds``, at most ``budget`` times. It takes an
+        (n, 3) float64 array of points and returns their n values, as anything
+        ``numpy.asarray`` takes (a PyTorch model: ``lambda p: model(torch.from_numpy(p)).
+        detach().numpy()``). An exception it raises reaches the caller as itself; a NaN, an
+        infinite value or the wrong number of values raises ``ValueError`` naming the batch.
+        Ctrl-C stops between batches.
+    budget : int, optional
+        With ``sdf``: the most evaluations (default 30000; at least 125).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
     raster_resolution, min_island, genus, keep_cavities, initial, threads
         ``rfta::Params``' settings of these names (its serde form, the one table of names).
@@ -269,6 +286,31 @@ def reconstruct(
     -------
     Reconstruction
     """
+    if sdf is not None or budget is not None:
+        if sdf is None:
+            raise ValueError("budget needs sdf: the function to ask")
+        if S is not None or points is not None:
+            raise ValueError("give either S (samples) or sdf (a function to ask), not both")
+        if not callable(sdf):
+            raise ValueError(f"sdf must be callable, not {type(sdf).__name__}")
+        budget = 30000 if budget is None else int(budget)
+        lo, hi = _bounds(bounds)
+        options = dict(
+            rounds=rounds, max_points_per_sphere=max_points_per_sphere, seed=seed,
+            clamp=clamp, check=check, depth=depth, screening=screening,
+            owner_band=owner_band, raster_resolution=raster_resolution,
+            min_island=min_island, genus=genus, keep_cavities=keep_cavities,
+            initial=initial, threads=threads,
+        )
+        V, F, P, N, report, adaptive, positions, values = _rfta.reconstruct_adaptive(
+            sdf, lo, hi, budget, preset=preset, options=options,
+            progress=_printer(verbose, progress),
+        )
+        return Reconstruction(
+            V, F, P, N, report, samples=(values, positions, None), adaptive=adaptive
+        )
+    if S is None:
+        raise ValueError("give the samples S (or sdf, a function to ask)")
     if isinstance(S, Samples):
         bounds, points = S.bounds, S.points
         clamp = S.clamp if clamp is None else clamp

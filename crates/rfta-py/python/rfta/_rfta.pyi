@@ -25,6 +25,24 @@ def reconstruct(
     npt.NDArray[np.float64],
     dict,
 ]: ...
+def reconstruct_adaptive(
+    sdf: Callable[[npt.NDArray[np.float64]], Any],
+    lo: Sequence[float],
+    hi: Sequence[float],
+    budget: int,
+    preset: str = "default",
+    options: Optional[dict] = None,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Tuple[
+    npt.NDArray[np.float64],
+    npt.NDArray[np.int64],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+    dict,
+    dict,
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+]: ...
 def page(
     vertices: npt.NDArray[np.float64],
     triangles: npt.NDArray[np.int64],
