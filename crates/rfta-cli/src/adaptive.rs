@@ -110,7 +110,7 @@ pub(crate) fn demo(output: &Path, budget: usize, params: &Params, ui: &Ui) -> Re
 
 /// The run with a progress line per pass.
 fn run(
-    oracle: &mut dyn FnMut(&[DVec3]) -> Result<Vec<f64>, OracleError>,
+    oracle: &mut rfta::adaptive::Oracle<'_>,
     bounds: Aabb,
     budget: usize,
     params: &Params,

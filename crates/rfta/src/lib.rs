@@ -76,7 +76,7 @@ pub use report::{
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use rfta_geom::SdfSamples;
+use rfta_geom::{SdfSamples, TriMesh};
 
 /// Errors of a reconstruction.
 #[derive(Debug, thiserror::Error)]
@@ -209,6 +209,21 @@ pub fn reconstruct_cancellable(
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
 ) -> Result<Reconstruction> {
+    reconstruct_settling(samples, params, progress, cancel, None)
+}
+
+/// A last edit of the repaired mesh, in the samples' coordinates, before the verdict measures it
+/// (an adaptive run's thin handles settled by asking the function).
+pub(crate) type Settle<'a> = &'a mut (dyn FnMut(&mut TriMesh, &mut RepairReport) -> Result<()> + Send);
+
+/// [`reconstruct_cancellable`] with a [`Settle`] step.
+pub(crate) fn reconstruct_settling(
+    samples: &SdfSamples,
+    params: &Params,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
+    settle: Option<Settle<'_>>,
+) -> Result<Reconstruction> {
     params.validate()?;
     check_memory(samples.len(), params)?;
     if let Some((scaled, factor)) = normalize::working_scale(samples) {
@@ -217,7 +232,19 @@ pub fn reconstruct_cancellable(
             clamp: params.clamp.map(|c| c * factor),
             ..params.clone()
         };
-        let mut out = pool::on_pool(params.threads, || run(&scaled, &params, progress, cancel))?;
+        // The settle step sees the samples' own coordinates.
+        let mut scaled_settle = settle.map(|f| {
+            move |mesh: &mut TriMesh, repair: &mut RepairReport| -> Result<()> {
+                mesh.map_vertices(|v| v / factor);
+                let r = f(mesh, repair);
+                mesh.map_vertices(|v| v * factor);
+                r
+            }
+        });
+        let settle = scaled_settle.as_mut().map(|f| f as Settle<'_>);
+        let mut out = pool::on_pool(params.threads, || {
+            run(&scaled, &params, progress, cancel, settle)
+        })?;
         out.mesh.map_vertices(|v| v / factor);
         for p in &mut out.points.points {
             *p /= factor;
@@ -226,7 +253,7 @@ pub fn reconstruct_cancellable(
         out.report.consistency.spacing /= factor;
         return Ok(out);
     }
-    pool::on_pool(params.threads, || run(samples, params, progress, cancel))
+    pool::on_pool(params.threads, || run(samples, params, progress, cancel, settle))
 }
 
 /// The six steps.
@@ -235,6 +262,7 @@ fn run(
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
+    settle: Option<Settle<'_>>,
 ) -> Result<Reconstruction> {
     let go_on = || {
         if cancel.load(Ordering::Relaxed) {
@@ -264,7 +292,10 @@ fn run(
     let mut rounds = rounds::Rounds::new(&unit, params, cloud);
     let rounds_report = rounds.run(&unit, params, &mut journal, progress, &go_on)?;
     go_on()?;
-    let finished = finish::finish(samples, &unit, params, rounds, &mut journal, progress)?;
+    let mut finished = finish::finish(samples, &unit, params, rounds, &mut journal, progress)?;
+    if let Some(settle) = settle {
+        settle(&mut finished.mesh, &mut finished.repair)?;
+    }
     let mut report = Report {
         input,
         initial,

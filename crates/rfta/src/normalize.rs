@@ -130,7 +130,7 @@ impl UnitBox {
     /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
     pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
         let band = match params.owner_band {
-            Some(k) if self.grid.is_some() || std::env::var("HACK_BAND").is_ok() => k * self.spacing(),
+            Some(k) if self.grid.is_some() => k * self.spacing(),
             _ => f64::INFINITY,
         };
         self.clamp.min(band)

@@ -240,6 +240,18 @@ pub struct RepairReport {
     /// Handles cut (the loop around each cut and both sides capped) to reach
     /// [`crate::Params::genus`] (0 without it).
     pub handles_cut: usize,
+    /// Components other than the largest, smaller than a base cell of an adaptive run, whose
+    /// centre it asked the function at ([`crate::adaptive`]; 0 otherwise).
+    pub small_components_asked: usize,
+    /// Of those, the ones removed: the function did not put their centre inside (a part) or
+    /// outside (a void) by an eighth of their size.
+    pub small_components_removed: usize,
+    /// Handles thinner than the samples resolve whose loop's centre an adaptive run asked the
+    /// function at ([`crate::adaptive`]; 0 otherwise).
+    pub thin_handles_asked: usize,
+    /// Of those, the ones cut: the function put the centre on the other side than the mesh (a bar
+    /// through empty space, a tunnel through material).
+    pub thin_handles_cut: usize,
     /// Closed components of the output that face inward: cavities in the solid, each around
     /// samples outside the shape (the island rule keeps no other). Unless
     /// [`crate::Params::keep_cavities`], those left are walled in by inside samples (a void the

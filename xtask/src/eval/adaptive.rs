@@ -1,54 +1,321 @@
-//! `cargo xtask eval --adaptive`: prototype.
+//! `cargo xtask eval --scenario adaptive [--levels B,..]`: reconstruction from an SDF that can be
+//! asked (`rfta::adaptive`), each dev shape's ground truth as the oracle (its exact signed
+//! distance), under budgets of evaluations (default 5k, 10k, 30k, 100k).
+//!
+//! Beside each budget: marching cubes and rfta's default preset on the grid over `[-1, 1]^3`
+//! with about as many points (`N + 1` points per axis, `N = round(cbrt(B)) - 1`), and marching
+//! cubes on the 129^3 grid (2.1 million evaluations). Per row: Chamfer against the ground truth,
+//! genus and components, cavities, thin loops, samples on the wrong side and spheres entered
+//! (against the samples the method had), rfta's own seconds and the oracle's. Output:
+//! `results.csv`, `report.md` and `chamfer.svg` (mean Chamfer against evaluations).
 
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use rfta_geom::Aabb;
 use rfta_geom::glam::DVec3;
+use rfta_geom::{Aabb, SdfSamples, TriMesh};
 use rfta_mesh::MeshIndex;
 use rfta_metrics::MeshSummary;
 
 use super::Shape;
+use super::report::{Line, line_chart};
 
-pub(crate) fn run(shapes: &[Shape], budgets: &[usize], samples: usize) -> Result<()> {
+/// The default budgets (evaluations).
+pub(crate) const BUDGETS: [f64; 4] = [5_000.0, 10_000.0, 30_000.0, 100_000.0];
+
+/// The grid marching cubes is measured on for comparison: 129^3 points.
+const FINE_GRID: usize = 128;
+
+/// One (shape, budget, method) result.
+struct Row {
+    shape: String,
+    budget: usize,
+    method: &'static str,
+    evaluations: usize,
+    chamfer: f64,
+    summary: Option<MeshSummary>,
+    gt_genus: Option<i64>,
+    consistency: Option<rfta::Consistency>,
+    rfta_seconds: f64,
+    oracle_seconds: f64,
+    passes: usize,
+    status: String,
+}
+
+impl Row {
+    fn right_topology(&self) -> bool {
+        self.summary
+            .as_ref()
+            .is_some_and(|s| s.components == 1 && s.genus == self.gt_genus)
+    }
+}
+
+/// The grid cells per axis whose points number about `budget`.
+fn grid_cells(budget: usize) -> usize {
+    ((budget as f64).cbrt().round() as usize).saturating_sub(1).max(2)
+}
+
+pub(crate) fn run(
+    shapes: &[Shape],
+    budgets: &[usize],
+    samples: usize,
+    tuning: &serde_json::Map<String, serde_json::Value>,
+    out: &Path,
+) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let params = rfta::Params::default()
+        .with_options(tuning.clone())
+        .context("eval options")?;
+    let mut rows = Vec::new();
     for shape in shapes {
-        let gt_index = MeshIndex::new(&shape.gt).context("gt")?;
-        let gt_summary = MeshSummary::of(&shape.gt);
-        for &b in budgets {
-            let t = Instant::now();
-            let mut oracle = |p: &[DVec3]| -> std::result::Result<Vec<f64>, rfta::adaptive::OracleError> {
-                Ok(gt_index.signed_distances(p))
+        let gt = MeshIndex::new(&shape.gt).with_context(|| format!("{}: empty", shape.name))?;
+        let gt_genus = MeshSummary::of(&shape.gt).genus;
+        let score = |mesh: &TriMesh| -> Result<(f64, MeshSummary)> {
+            let index = MeshIndex::new(mesh)?;
+            let chamfer =
+                rfta_metrics::chamfer_indexed((&shape.gt, &gt), (mesh, &index), samples, 1);
+            Ok((chamfer, MeshSummary::of(mesh)))
+        };
+        let base = |budget, method, evaluations| Row {
+            shape: shape.name.clone(),
+            budget,
+            method,
+            evaluations,
+            chamfer: f64::NAN,
+            summary: None,
+            gt_genus,
+            consistency: None,
+            rfta_seconds: 0.0,
+            oracle_seconds: 0.0,
+            passes: 0,
+            status: "ok".into(),
+        };
+        // Marching cubes on the fine grid, once per shape.
+        let (grid, values) = super::grid_for(shape, &gt, FINE_GRID)?;
+        let t = Instant::now();
+        let mesh = rfta_mc::marching_cubes(&grid, &values, 0.0);
+        let mut row = base(0, "mc-129", grid.len());
+        row.rfta_seconds = t.elapsed().as_secs_f64();
+        (row.chamfer, _) = score(&mesh)?;
+        row.summary = Some(MeshSummary::of(&mesh));
+        rows.push(row);
+        for &budget in budgets {
+            // The adaptive run.
+            let mut row = base(budget, "rfta-adaptive", 0);
+            let mut oracle = |p: &[DVec3]| -> Result<Vec<f64>, rfta::adaptive::OracleError> {
+                Ok(gt.signed_distances(p))
             };
-            let out = rfta::adaptive::reconstruct_adaptive(
+            let result = rfta::adaptive::reconstruct_adaptive(
                 &mut oracle,
                 Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
-                rfta::adaptive::Budget::evaluations(b),
-                &rfta::Params { spsr_depth: std::env::var("HACK_DEPTH").ok().and_then(|d| d.parse().ok()), ..rfta::Params::default() },
+                rfta::adaptive::Budget::evaluations(budget),
+                &params,
                 &mut |_| {},
                 &mut |_| {},
-                &std::sync::atomic::AtomicBool::new(false),
+                &AtomicBool::new(false),
             );
-            let secs = t.elapsed().as_secs_f64();
-            match out {
-                Ok(out) => {
-                    let mesh = &out.reconstruction.mesh;
-                    let index = MeshIndex::new(mesh)?;
-                    let ch = rfta_metrics::chamfer_indexed((&shape.gt, &gt_index), (mesh, &index), samples, 1);
-                    let s = MeshSummary::of(mesh);
-                    let c = &out.reconstruction.report.consistency;
-                    println!(
-                        "{} b={} evals={} chamfer={:.6} genus={:?}/{:?} comps={} cav={} wrong={} entered={} thin={} secs={:.2} rfta={:.2} oracle={:.2} passes={}",
-                        shape.name, b, out.report.evaluations, ch, s.genus, gt_summary.genus, s.components, s.cavities,
-                        c.sign_errors, c.entered, c.thin_loops.len(), secs, out.report.rfta_seconds, out.report.oracle_seconds,
-                        out.report.passes.iter().map(|p| format!("[{} p{} r{} e{:.4} u{}]", p.samples, p.probes, p.refined, p.largest_error, p.undecided)).collect::<Vec<_>>().join("")
-                    );
-                    if std::env::var("RFTA_TIMINGS").is_ok() {
-                        println!("{:?}", out.reconstruction.report.timings);
-                    }
+            match result {
+                Ok(a) => {
+                    let mesh = &a.reconstruction.mesh;
+                    let (chamfer, summary) = score(mesh)?;
+                    row.evaluations = a.report.evaluations;
+                    row.chamfer = chamfer;
+                    row.summary = Some(summary);
+                    row.consistency = Some(a.reconstruction.report.consistency.clone());
+                    row.rfta_seconds = a.report.rfta_seconds;
+                    row.oracle_seconds = a.report.oracle_seconds;
+                    row.passes = a.report.passes.len();
                 }
-                Err(e) => println!("{} b={} error {e}", shape.name, b),
+                Err(e) => row.status = e.to_string(),
+            }
+            println!(
+                "{} {budget}: Chamfer {:.6}, genus {:?} in {} component(s), {:.2} s",
+                shape.name,
+                row.chamfer,
+                row.summary.as_ref().and_then(|s| s.genus),
+                row.summary.as_ref().map_or(0, |s| s.components),
+                row.rfta_seconds
+            );
+            rows.push(row);
+            // The grid with about as many points.
+            let n = grid_cells(budget);
+            let (grid, values) = super::grid_for(shape, &gt, n)?;
+            let t = Instant::now();
+            let mesh = rfta_mc::marching_cubes(&grid, &values, 0.0);
+            let mut row = base(budget, "mc-grid", grid.len());
+            row.rfta_seconds = t.elapsed().as_secs_f64();
+            (row.chamfer, _) = score(&mesh)?;
+            row.summary = Some(MeshSummary::of(&mesh));
+            rows.push(row);
+            let grid_samples = SdfSamples::grid(grid, values)?;
+            let t = Instant::now();
+            let mut row = base(budget, "rfta-grid", grid.len());
+            match rfta::reconstruct(&grid_samples, &params) {
+                Ok(r) => {
+                    row.rfta_seconds = t.elapsed().as_secs_f64();
+                    let (chamfer, summary) = score(&r.mesh)?;
+                    row.chamfer = chamfer;
+                    row.summary = Some(summary);
+                    row.consistency = Some(r.report.consistency);
+                }
+                Err(e) => row.status = e.to_string(),
+            }
+            rows.push(row);
+        }
+    }
+    write_csv(&out.join("results.csv"), &rows)?;
+    write_markdown(&out.join("report.md"), &rows, budgets)?;
+    chart(&out.join("chamfer.svg"), &rows, budgets)?;
+    super::no_defects(
+        rows.iter()
+            .map(|r| (format!("{} {} {}", r.shape, r.budget, r.method), &r.status)),
+    )
+}
+
+fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
+    let mut s = String::from(
+        "shape,budget,method,evaluations,chamfer,genus,gt_genus,components,cavities,thin_loops,sign_errors,entered,rfta_seconds,oracle_seconds,passes,status\n",
+    );
+    for r in rows {
+        let genus = r.summary.as_ref().and_then(|s| s.genus);
+        let c = r.consistency.as_ref();
+        writeln!(
+            s,
+            "{},{},{},{},{:.6},{},{},{},{},{},{},{},{:.3},{:.3},{},\"{}\"",
+            r.shape,
+            r.budget,
+            r.method,
+            r.evaluations,
+            r.chamfer,
+            genus.map_or(String::new(), |g| g.to_string()),
+            r.gt_genus.map_or(String::new(), |g| g.to_string()),
+            r.summary.as_ref().map_or(0, |s| s.components),
+            r.summary.as_ref().map_or(0, |s| s.cavities),
+            c.map_or(String::new(), |c| c.thin_loops.len().to_string()),
+            c.map_or(String::new(), |c| c.sign_errors.to_string()),
+            c.map_or(String::new(), |c| c.entered.to_string()),
+            r.rfta_seconds,
+            r.oracle_seconds,
+            r.passes,
+            r.status.replace('"', "'")
+        )?;
+    }
+    std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+/// The mean of a method's Chamfer at a budget, with how many rows had the right genus in one
+/// component, over the rows that ran.
+fn mean(rows: &[Row], budget: usize, method: &str) -> Option<(f64, usize, usize, f64)> {
+    let mine: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.budget == budget && r.method == method && r.chamfer.is_finite())
+        .collect();
+    if mine.is_empty() {
+        return None;
+    }
+    let n = mine.len() as f64;
+    Some((
+        mine.iter().map(|r| r.chamfer).sum::<f64>() / n,
+        mine.iter().filter(|r| r.right_topology()).count(),
+        mine.len(),
+        mine.iter().map(|r| r.rfta_seconds).sum::<f64>() / n,
+    ))
+}
+
+fn write_markdown(path: &Path, rows: &[Row], budgets: &[usize]) -> Result<()> {
+    let mut s = String::from("# Adaptive sampling: rfta asking the SDF, against grids\n\n");
+    s.push_str(
+        "Each dev shape's ground truth is the oracle (its exact signed distance). `rfta-adaptive`: \
+         `rfta::adaptive::reconstruct_adaptive` over [-1, 1]^3 with the budget; `rfta-grid` and \
+         `mc-grid`: rfta's default preset and marching cubes on the grid with about as many \
+         points; `mc-129`: marching cubes on the 129^3 grid. Seconds are rfta's own (the \
+         oracle's apart).\n\n",
+    );
+    if let Some((chamfer, right, of, secs)) = mean(rows, 0, "mc-129") {
+        writeln!(
+            s,
+            "Marching cubes on 129^3 (2,146,689 evaluations): mean Chamfer {chamfer:.6}, right genus in one component {right} of {of}, {secs:.3} s.\n"
+        )?;
+    }
+    s.push_str("| budget | method | evaluations | mean Chamfer | right genus, 1 component | mean s |\n|---|---|---|---|---|---|\n");
+    for &b in budgets {
+        for method in ["rfta-adaptive", "rfta-grid", "mc-grid"] {
+            if let Some((chamfer, right, of, secs)) = mean(rows, b, method) {
+                let evals = rows
+                    .iter()
+                    .find(|r| r.budget == b && r.method == method)
+                    .map_or(0, |r| r.evaluations);
+                let evals = if method == "rfta-adaptive" {
+                    format!("<= {b}")
+                } else {
+                    evals.to_string()
+                };
+                writeln!(
+                    s,
+                    "| {b} | {method} | {evals} | {chamfer:.6} | {right} of {of} | {secs:.2} |"
+                )?;
             }
         }
     }
+    s.push_str("\n## Per shape\n\nChamfer, genus/components (ground truth's genus in the shape column), thin loops, wrong side, entered, rfta s (+ oracle s).\n\n| shape | budget | method | Chamfer | genus/comps | thin | wrong | entered | s |\n|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let summary = r.summary.as_ref();
+        let c = r.consistency.as_ref();
+        writeln!(
+            s,
+            "| {} ({}) | {} | {} | {} | {}/{} | {} | {} | {} | {:.2}{} |",
+            r.shape,
+            r.gt_genus.map_or("?".into(), |g| g.to_string()),
+            if r.budget == 0 { "-".into() } else { r.budget.to_string() },
+            r.method,
+            if r.chamfer.is_finite() { format!("{:.6}", r.chamfer) } else { r.status.clone() },
+            summary.and_then(|s| s.genus).map_or("-".into(), |g| g.to_string()),
+            summary.map_or(0, |s| s.components),
+            c.map_or("-".into(), |c| c.thin_loops.len().to_string()),
+            c.map_or("-".into(), |c| c.sign_errors.to_string()),
+            c.map_or("-".into(), |c| c.entered.to_string()),
+            r.rfta_seconds,
+            if r.oracle_seconds > 0.0 { format!(" (+{:.2})", r.oracle_seconds) } else { String::new() },
+        )?;
+    }
+    std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
+}
+
+/// Mean Chamfer against evaluations (log10 on the x axis).
+fn chart(path: &Path, rows: &[Row], budgets: &[usize]) -> Result<()> {
+    let series: Vec<Line> = ["rfta-adaptive", "rfta-grid", "mc-grid"]
+        .iter()
+        .map(|&method| {
+            let points = budgets
+                .iter()
+                .filter_map(|&b| mean(rows, b, method).map(|m| ((b as f64).log10(), m.0)))
+                .collect();
+            (method.to_string(), method == "mc-grid", points)
+        })
+        .chain(mean(rows, 0, "mc-129").map(|m| {
+            let xs = budgets.iter().map(|&b| (b as f64).log10());
+            (
+                "mc-129 (2.1M evaluations)".to_string(),
+                true,
+                xs.map(|x| (x, m.0)).collect(),
+            )
+        }))
+        .collect();
+    let ticks: Vec<(f64, String)> = budgets
+        .iter()
+        .map(|&b| ((b as f64).log10(), b.to_string()))
+        .collect();
+    line_chart(
+        path,
+        "Mean Chamfer vs evaluations of the SDF (log scale)",
+        "evaluations",
+        &ticks,
+        &series,
+        1,
+    )
 }

@@ -94,6 +94,9 @@ struct Args {
     res_given: bool,
     /// `--vdb`: rfta against OpenVDB's volumeToMesh on level sets ([`vdb`]).
     vdb: bool,
+    /// `--scenario adaptive`: reconstruction from the ground truth's SDF under budgets
+    /// (`--levels`), against grids of as many points ([`adaptive`]).
+    adaptive: bool,
 }
 
 /// The methods `--methods` takes; all but the last run without it. `rfta-genus` is the default
@@ -115,6 +118,7 @@ fn parse(args: &[String]) -> Result<Args> {
         plane: false,
         res_given: false,
         vdb: false,
+        adaptive: false,
     };
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -167,6 +171,10 @@ fn parse(args: &[String]) -> Result<Args> {
                         a.scenarios.extend(scenario::Scenario::PARAMS);
                         continue;
                     }
+                    if name == "adaptive" {
+                        a.adaptive = true;
+                        continue;
+                    }
                     let Some(sc) = scenario::Scenario::ALL
                         .into_iter()
                         .find(|s| s.name() == name)
@@ -174,7 +182,7 @@ fn parse(args: &[String]) -> Result<Args> {
                         let known: Vec<&str> =
                             scenario::Scenario::ALL.iter().map(|s| s.name()).collect();
                         bail!(
-                            "unknown scenario '{name}' (known: {}, params)",
+                            "unknown scenario '{name}' (known: {}, params, adaptive)",
                             known.join(", ")
                         );
                     };
@@ -238,9 +246,21 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         (_, Some(dir)) => load_meshes(dir)?,
         _ => unreachable!("one of them is set above"),
     };
-    if let Ok(b) = std::env::var("RFTA_ADAPTIVE") {
-        let budgets: Vec<usize> = b.split(',').filter_map(|x| x.parse().ok()).collect();
-        return adaptive::run(&shapes, &budgets, a.samples);
+    if a.adaptive {
+        let budgets: Vec<usize> = a
+            .levels
+            .clone()
+            .unwrap_or(adaptive::BUDGETS.to_vec())
+            .iter()
+            .map(|&b| b as usize)
+            .collect();
+        let out = a.out.clone().unwrap_or_else(|| {
+            root.join("target/eval")
+                .join(format!("adaptive-{}", std::process::id()))
+        });
+        adaptive::run(&shapes, &budgets, a.samples, &a.tuning, &out)?;
+        println!("wrote {}", out.display());
+        return Ok(());
     }
     if a.vdb {
         let res = if a.res_given {

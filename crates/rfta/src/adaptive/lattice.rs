@@ -140,6 +140,11 @@ impl Lattice {
         (self.step * f64::from(cell.side())).length()
     }
 
+    /// The side of a base cell (its longest axis).
+    pub(crate) fn base_spacing(&self) -> f64 {
+        self.step.max_element() * f64::from(1u32 << FINEST)
+    }
+
     /// The spacing of the finest level any leaf has reached: the sample spacing near the surface.
     pub(crate) fn finest_spacing(&self) -> f64 {
         let level = self.leaves.iter().map(|c| c.level).max().unwrap_or(0);

@@ -23,6 +23,7 @@
 //! deterministic oracle gives the same samples and the same mesh on any number of threads.
 //! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
 
+mod settle;
 mod lattice;
 
 use std::sync::atomic::AtomicBool;
@@ -37,6 +38,9 @@ use lattice::{Cell, Lattice};
 
 /// What an oracle's failure carries back: the caller's own error.
 pub type OracleError = Box<dyn std::error::Error + Send + Sync>;
+
+/// An SDF that can be asked: the values at a batch of points, in order, or the caller's error.
+pub type Oracle<'a> = dyn FnMut(&[DVec3]) -> std::result::Result<Vec<f64>, OracleError> + Send + 'a;
 
 /// The fewest evaluations a budget may allow: the smallest base grid (5^3 points).
 pub const MIN_BUDGET: usize = 125;
@@ -126,7 +130,7 @@ pub struct AdaptiveReconstruction {
 /// number of values or a value that is not finite (nothing is reconstructed from such a batch);
 /// [`Error::Cancelled`]; otherwise as [`crate::reconstruct`].
 pub fn reconstruct_adaptive(
-    oracle: &mut dyn FnMut(&[DVec3]) -> std::result::Result<Vec<f64>, OracleError>,
+    oracle: &mut Oracle<'_>,
     bounds: Aabb,
     budget: Budget,
     params: &Params,
@@ -152,6 +156,7 @@ pub fn reconstruct_adaptive(
     let mut asker = Asker {
         oracle,
         batches: 0,
+        asked: 0,
         seconds: 0.0,
         cancel,
     };
@@ -174,70 +179,95 @@ pub fn reconstruct_adaptive(
         budget: budget.evaluations,
         ..AdaptiveReport::default()
     };
+    // Kept for the final pass's questions about thin handles.
+    let reserve = (budget.evaluations as f64 * HANDLE_SHARE) as usize;
+    let usable = budget.evaluations.saturating_sub(reserve).max(lattice.len());
     loop {
+        // A pass spends about what all before it did: the reconstructions cost about twice the
+        // last one's, and the error halves where it matters at each pass.
+        let spend = (usable - lattice.len()).min(lattice.len().max(MIN_BUDGET));
+        if spend < MIN_BUDGET / 5 {
+            let left = budget.evaluations - lattice.len();
+            return final_pass(lattice, &mut asker, left, params, report, progress, on_pass);
+        }
         let t = Instant::now();
         let oracle_before = asker.seconds;
         let samples = lattice.samples()?;
-        let left = budget.evaluations - lattice.len();
-        // A pass spends about what all before it did: the reconstructions cost about twice the
-        // last one's, and the error halves where it matters at each pass.
-        let spend = left.min(lattice.len().max(MIN_BUDGET));
-        let last = spend < MIN_BUDGET / 5;
-        let rec = crate::reconstruct_cancellable(
-            &samples,
-            if last { params } else { &guide },
-            progress,
-            cancel,
-        )?;
+        let rec = crate::reconstruct_cancellable(&samples, &guide, progress, cancel)?;
         let mut pass = Pass {
             samples: samples.len(),
             ..Pass::default()
         };
-        if last {
-            pass.rfta_seconds = t.elapsed().as_secs_f64();
-            report.finish(pass, &lattice, on_pass);
-            return Ok(AdaptiveReconstruction {
-                reconstruction: rec,
-                samples,
-                report,
-            });
-        }
         let index = MeshIndex::new(&rec.mesh)?;
         let done = refine_where_wrong(&mut lattice, &index, &mut asker, spend, budget, &mut pass)?;
         pass.oracle_seconds = asker.seconds - oracle_before;
         pass.rfta_seconds = t.elapsed().as_secs_f64() - pass.oracle_seconds;
-        let pass_copy = pass.clone();
+        on_pass(&pass);
         report.passes.push(pass);
-        on_pass(&pass_copy);
         if done {
-            // Nothing left undecided, or nothing left to refine: the guide's samples are final.
-            let t = Instant::now();
-            let samples = lattice.samples()?;
-            let rec = crate::reconstruct_cancellable(&samples, params, progress, cancel)?;
-            let pass = Pass {
-                samples: samples.len(),
-                rfta_seconds: t.elapsed().as_secs_f64(),
-                ..Pass::default()
-            };
-            report.finish(pass, &lattice, on_pass);
-            return Ok(AdaptiveReconstruction {
-                reconstruction: rec,
-                samples,
-                report,
-            });
+            // Nothing left undecided, or nothing left to refine.
+            let left = budget.evaluations - lattice.len();
+            return final_pass(lattice, &mut asker, left, params, report, progress, on_pass);
         }
     }
 }
 
-impl AdaptiveReport {
-    fn finish(&mut self, pass: Pass, lattice: &Lattice, on_pass: &mut dyn FnMut(&Pass)) {
-        on_pass(&pass);
-        self.passes.push(pass);
-        self.evaluations = lattice.len();
-        self.finest_spacing = lattice.finest_spacing();
-        self.oracle_seconds = self.passes.iter().map(|p| p.oracle_seconds).sum();
-        self.rfta_seconds = self.passes.iter().map(|p| p.rfta_seconds).sum();
-    }
+/// The share of the budget kept for the final pass's questions about small components and thin
+/// handles (`settle.rs`).
+pub const HANDLE_SHARE: f64 = 0.01;
+
+/// How far apart the two sides of a cut thin handle move, in finest spacings.
+const CUT_GAP: f64 = 0.05;
+
+/// The last pass: the caller's parameters on every sample, the small components and thin handles
+/// settled by asking the function at most `left` times (`settle.rs`).
+fn final_pass(
+    lattice: Lattice,
+    asker: &mut Asker<'_>,
+    left: usize,
+    params: &Params,
+    mut report: AdaptiveReport,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    on_pass: &mut dyn FnMut(&Pass),
+) -> Result<AdaptiveReconstruction> {
+    let t = Instant::now();
+    let oracle_before = asker.seconds;
+    let samples = lattice.samples()?;
+    // Loops up to THIN_LOOP base cells long: the coarsest spacing any part of the surface may
+    // have been left at.
+    let bound = crate::consistency::THIN_LOOP * lattice.base_spacing();
+    let gap = CUT_GAP * lattice.finest_spacing();
+    let small = lattice.base_spacing();
+    let cancel = asker.cancel;
+    let mut settle = |mesh: &mut rfta_geom::TriMesh, repair: &mut crate::RepairReport| {
+        let mut ask = |p: &[DVec3]| asker.values(p);
+        let (asked, removed) = settle::settle_components(mesh, small, left, &mut ask)?;
+        repair.small_components_asked = asked;
+        repair.small_components_removed = removed;
+        let s = settle::settle(mesh, bound, gap, left - asked, &mut ask)?;
+        repair.thin_handles_asked = s.asked;
+        repair.thin_handles_cut = s.cut;
+        Ok(())
+    };
+    let rec = crate::reconstruct_settling(&samples, params, progress, cancel, Some(&mut settle))?;
+    let oracle_seconds = asker.seconds - oracle_before;
+    let pass = Pass {
+        samples: samples.len(),
+        oracle_seconds,
+        rfta_seconds: t.elapsed().as_secs_f64() - oracle_seconds,
+        ..Pass::default()
+    };
+    on_pass(&pass);
+    report.passes.push(pass);
+    report.evaluations = asker.asked;
+    report.finest_spacing = lattice.finest_spacing();
+    report.oracle_seconds = report.passes.iter().map(|p| p.oracle_seconds).sum();
+    report.rfta_seconds = report.passes.iter().map(|p| p.rfta_seconds).sum();
+    Ok(AdaptiveReconstruction {
+        reconstruction: rec,
+        samples,
+        report,
+    })
 }
 
 /// Cells of the base grid along the box's longest side for a budget: its points about a sixth of
@@ -250,8 +280,10 @@ fn base_cells(evaluations: usize) -> u32 {
 /// The oracle with its bookkeeping: batches counted from 1, the time spent in it, the answers
 /// checked.
 struct Asker<'a> {
-    oracle: &'a mut dyn FnMut(&[DVec3]) -> std::result::Result<Vec<f64>, OracleError>,
+    oracle: &'a mut Oracle<'a>,
     batches: usize,
+    /// Points asked for in all.
+    asked: usize,
     seconds: f64,
     cancel: &'a AtomicBool,
 }
@@ -262,14 +294,24 @@ impl Asker<'_> {
         if keys.is_empty() {
             return Ok(());
         }
+        let points: Vec<DVec3> = keys.iter().map(|&k| lattice.position(k)).collect();
+        let values = self.values(&points)?;
+        lattice.insert(keys, &values);
+        Ok(())
+    }
+
+    /// The oracle's values at `points`, in one batch, checked.
+    fn values(&mut self, points: &[DVec3]) -> Result<Vec<f64>> {
+        if points.is_empty() {
+            return Ok(Vec::new());
+        }
         if self.cancel.load(std::sync::atomic::Ordering::Relaxed) {
             return Err(Error::Cancelled);
         }
         self.batches += 1;
         let batch = self.batches;
-        let points: Vec<DVec3> = keys.iter().map(|&k| lattice.position(k)).collect();
         let t = Instant::now();
-        let answer = (self.oracle)(&points);
+        let answer = (self.oracle)(points);
         self.seconds += t.elapsed().as_secs_f64();
         let values = answer.map_err(|source| Error::Oracle { batch, source })?;
         if values.len() != points.len() {
@@ -282,14 +324,11 @@ impl Asker<'_> {
             let p = points[i];
             return Err(Error::OracleAnswer {
                 batch,
-                reason: format!(
-                    "the value at point {i} ({}, {}, {}) is {v}",
-                    p.x, p.y, p.z
-                ),
+                reason: format!("the value at point {i} ({}, {}, {}) is {v}", p.x, p.y, p.z),
             });
         }
-        lattice.insert(keys, &values);
-        Ok(())
+        self.asked += points.len();
+        Ok(values)
     }
 }
 
