@@ -33,7 +33,7 @@ cargo xtask <command>
 
 commands:
   ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, gpytoolbox's own tests against the drop-in, pytest), slurm, shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
+            fresh venv, gpytoolbox's own tests against the drop-in, pytest, the adaptive example), slurm, shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
   shaders   validate every shaders/*.wgsl with naga
   web       [--out DIR] [--check]: the browser demo (rfta-web as WebAssembly, wasm32-wasip1) as one
             page, <out>/index.html (default target/web); --check opens it in headless Chromium:
@@ -153,6 +153,17 @@ fn python(root: &Path, cargo: &str) -> Result<()> {
         &bin.join("pytest"),
         &["-q", "crates/rfta-py/tests"],
         &[("RFTA_BIN", &rfta_bin)],
+    )?;
+    // The documented example of a callable SDF (adaptive sampling), as a user runs it.
+    println!("==> crates/rfta-py/examples/adaptive_sdf.py");
+    let mesh = target.join("adaptive_sdf.obj");
+    run(
+        &bin.join("python"),
+        &[
+            "crates/rfta-py/examples/adaptive_sdf.py",
+            &mesh.display().to_string(),
+        ],
+        &[],
     )
 }
 

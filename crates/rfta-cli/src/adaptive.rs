@@ -61,15 +61,17 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
     params.clamp = args.checks.clamp;
     params.check = !args.checks.no_check;
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
-    let mut oracle = |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(index.signed_distances(p)) };
+    let budget = args.budget.unwrap_or(30_000);
+    let mut oracle =
+        |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(index.signed_distances(p)) };
     ui.say(format!(
         "asking {name}'s signed distance at most {} times over [{}, {}]",
-        args.budget,
+        budget,
         fmt_point(bounds.min),
         fmt_point(bounds.max)
     ));
     let t = Instant::now();
-    let out = run(&mut oracle, bounds, args.budget, &params, ui)
+    let out = run(&mut oracle, bounds, budget, &params, ui)
         .with_context(|| format!("{name}: adaptive reconstruction failed"))?;
     let seconds = t.elapsed().as_secs_f64();
     summarize(&out, ui);
@@ -79,7 +81,7 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
         &out.reconstruction,
         &out.samples,
         seconds,
-        &format!("rfta reconstruct --from-mesh {name} --budget {}", args.budget),
+        &format!("rfta reconstruct --from-mesh {name} --budget {}", budget),
         Some(("adaptive", extra)),
         ui,
     )

@@ -42,9 +42,9 @@ pub(crate) struct Args {
     /// it (adaptive sampling, at most --budget evaluations; for evaluation and demos).
     #[arg(long, value_name = "MESH", conflicts_with_all = ["input", "grid"])]
     pub(crate) from_mesh: Option<PathBuf>,
-    /// With --from-mesh: the most evaluations of the SDF.
-    #[arg(long, value_name = "N", requires = "from_mesh", default_value_t = 30_000)]
-    pub(crate) budget: usize,
+    /// With --from-mesh: the most evaluations of the SDF (default 30000).
+    #[arg(long, value_name = "N", requires = "from_mesh")]
+    pub(crate) budget: Option<usize>,
     /// Output mesh (.obj .ply .stl .glb); for 2D input, polylines (.obj .svg .csv).
     #[arg(short, long)]
     pub(crate) output: PathBuf,
@@ -352,6 +352,9 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     let Some(input) = args.input.clone() else {
         return crate::adaptive::from_mesh(&args, ui);
     };
+    if args.budget.is_some() {
+        bail!("--budget is the most evaluations of --from-mesh's SDF; an SDF file has its samples");
+    }
     let mut files = crate::paths::Files::new();
     files
         .read_sdf("the input", &input)
@@ -541,9 +544,9 @@ pub(crate) struct DemoArgs {
     /// sampling a grid.
     #[arg(long, conflicts_with_all = ["res", "two_d"])]
     adaptive: bool,
-    /// With --adaptive: the most evaluations of the SDF.
-    #[arg(long, value_name = "N", requires = "adaptive", default_value_t = 10_000)]
-    budget: usize,
+    /// With --adaptive: the most evaluations of the SDF (default 10000).
+    #[arg(long, value_name = "N", requires = "adaptive")]
+    budget: Option<usize>,
     #[command(flatten)]
     tuning: Tuning,
 }
@@ -563,7 +566,8 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
         crate::ui::check_output(&output)?;
     }
     if args.adaptive {
-        return crate::adaptive::demo(&output, args.budget, &args.tuning.params()?, ui);
+        let budget = args.budget.unwrap_or(10_000);
+        return crate::adaptive::demo(&output, budget, &args.tuning.params()?, ui);
     }
     let res = args.res.unwrap_or(if args.two_d { 32 } else { 20 });
     if res < 2 {

@@ -419,3 +419,68 @@ def test_initial_points_from_the_gradients_or_the_raster():
     assert rfta.reconstruct(S, preset="fast", initial="raster").report["raster_resolution"] >= 64
     with pytest.raises(ValueError, match="initial"):
         rfta.reconstruct(S, preset="fast", initial="teapot")
+
+
+def test_a_callable_sdf_is_asked_within_the_budget():
+    calls = []
+
+    def sdf(p):
+        assert p.dtype == np.float64 and p.ndim == 2 and p.shape[1] == 3
+        calls.append(len(p))
+        return list(torus_sdf(p))  # anything numpy.asarray takes
+
+    out = rfta.reconstruct(sdf=sdf, budget=2000, rounds=2)
+    a = out.adaptive
+    assert sum(calls) == a["evaluations"] <= 2000
+    assert len(a["passes"]) >= 2 and a["oracle_seconds"] >= 0 and a["rfta_seconds"] > 0
+    assert out.report["watertight"] and out.report["components"] == 1
+    # Within a hundredth of the torus on average (its tube is 0.4 across).
+    assert np.abs(torus_sdf(out.vertices)).mean() < 0.01
+    values, positions, grid_ = out.samples
+    assert grid_ is None and len(values) == len(positions) <= 2000
+
+
+def test_a_failing_callable_raises_its_own_error_or_names_the_batch():
+    class ModelDown(Exception):
+        pass
+
+    def down(p):
+        raise ModelDown("the model server is down")
+
+    with pytest.raises(ModelDown, match="server is down"):
+        rfta.reconstruct(sdf=down, budget=500)
+    with pytest.raises(ValueError, match="batch 1.*NaN"):
+        rfta.reconstruct(sdf=lambda p: np.full(len(p), np.nan), budget=500)
+    with pytest.raises(ValueError, match="batch 1.*values for"):
+        rfta.reconstruct(sdf=lambda p: np.zeros(len(p) + 1), budget=500)
+    with pytest.raises(ValueError):
+        rfta.reconstruct(sdf=lambda p: ["not a number"] * len(p), budget=500)
+    with pytest.raises(ValueError, match="at least 125"):
+        rfta.reconstruct(sdf=torus_sdf, budget=100)
+    with pytest.raises(ValueError, match="not both"):
+        rfta.reconstruct(np.zeros((4, 4, 4)), sdf=torus_sdf)
+    with pytest.raises(ValueError, match="budget needs sdf"):
+        rfta.reconstruct(np.zeros((4, 4, 4)), budget=1000)
+    with pytest.raises(ValueError, match="callable"):
+        rfta.reconstruct(sdf=3.0)
+
+
+def test_ctrl_c_stops_an_adaptive_run_between_batches():
+    started = threading.Event()
+
+    def slow(p):
+        started.set()
+        time.sleep(0.05)
+        return torus_sdf(p)
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    t = time.perf_counter()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            rfta.reconstruct(sdf=slow, budget=200_000)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+    assert started.is_set() and time.perf_counter() - t < 30

@@ -185,8 +185,12 @@ impl<'a> Splitter<'a> {
         Some(k)
     }
 
-    /// Moves vertex `v` to `to`, unless a face around it was split already or would turn over.
+    /// Moves vertex `v` to `to`, unless a face around it was split already or would turn over,
+    /// or `v` is a vertex a split made (its faces are split ones).
     pub fn move_vertex(&mut self, mesh: &mut TriMesh, v: u32, to: DVec3) -> bool {
+        if v as usize + 1 >= self.incident.start.len() {
+            return false;
+        }
         let around = self.incident.faces(v);
         if around.iter().any(|&f| self.touched[f as usize]) {
             return false;
@@ -208,5 +212,27 @@ impl<'a> Splitter<'a> {
             self.touched[f as usize] = true;
         }
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A vertex a split made is left where it is (its faces are split ones): no move, no panic.
+    /// Found by an adaptive run whose dents first split a face and then asked to move a vertex of
+    /// the same, changed face.
+    #[test]
+    fn a_vertex_a_split_made_is_not_moved() {
+        let mut mesh = rfta_geom::shapes::icosphere(1.0, 1);
+        let incident = Incidence::of(&mesh);
+        let mut splitter = Splitter::new(&incident, &mesh);
+        let [a, b, c] = mesh.triangle(0);
+        let centre = (a + b + c) / 3.0;
+        let k = splitter
+            .split(&mut mesh, 0, [1.0 / 3.0; 3], centre)
+            .expect("split");
+        assert!(!splitter.move_vertex(&mut mesh, k, centre * 1.1));
+        assert_eq!(mesh.vertices[k as usize], centre);
     }
 }

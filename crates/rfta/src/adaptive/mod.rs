@@ -244,9 +244,10 @@ fn final_pass(
         let (asked, removed) = settle::settle_components(mesh, small, left, &mut ask)?;
         repair.small_components_asked = asked;
         repair.small_components_removed = removed;
-        let s = settle::settle(mesh, bound, gap, left - asked, &mut ask)?;
+        let s = settle::settle(mesh, bound, gap, left - 2 * asked, &mut ask)?;
         repair.thin_handles_asked = s.asked;
         repair.thin_handles_cut = s.cut;
+        repair.cavities = rfta_mesh::cavities(mesh).len();
         Ok(())
     };
     let rec = crate::reconstruct_settling(&samples, params, progress, cancel, Some(&mut settle))?;

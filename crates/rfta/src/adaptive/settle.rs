@@ -34,8 +34,8 @@ const DEPTH: f64 = 1.0 / 8.0;
 /// `small` across, and removes those the function does not confirm: a part must lie outside the
 /// largest component with the function inside at its centre, a void (an inward shell) inside it
 /// with the function outside at its centre and inside in the wall between it and the largest
-/// component's nearest point (else it is a pocket the surface sealed). Two questions each.
-/// Returns (components asked about, removed).
+/// component's nearest point (else it is a pocket the surface sealed). Two questions each, at
+/// most `max_asks` in all. Returns (components asked about, removed).
 ///
 /// # Errors
 /// The oracle's.
