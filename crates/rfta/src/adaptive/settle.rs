@@ -24,7 +24,7 @@ use rfta_mesh::MeshIndex;
 use crate::Result;
 
 /// Rounds of loops searched, asked and cut at most (each cut changes the loops left).
-const ROUNDS: usize = 4;
+const ROUNDS: usize = 12;
 
 /// A small component is kept when the function at its centre is this fraction of its
 /// diagonal on its side (a ball's centre is a third of its box's diagonal deep).
