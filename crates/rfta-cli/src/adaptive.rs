@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use rfta::adaptive::{AdaptiveReconstruction, Budget, OracleError, Pass};
-use rfta::geom::glam::DVec3;
 use rfta::geom::Aabb;
+use rfta::geom::glam::DVec3;
 use rfta::{Params, Stage};
 use rfta_mesh::{MeshIndex, Topology};
 
@@ -52,7 +52,8 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
             topology.boundary_edges, topology.nonmanifold_edges
         ));
     }
-    let index = MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
+    let index =
+        MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
     let bounds = match args.bounds {
         Some(b) => Aabb::new(b.min, b.max),
         None => grown(index.bounds()),
@@ -90,8 +91,9 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
 /// `rfta demo --adaptive`: the demo's two tori asked at most `budget` times.
 pub(crate) fn demo(output: &Path, budget: usize, params: &Params, ui: &Ui) -> Result<()> {
     let shape = rfta::geom::Analytic::TwoTori;
-    let mut oracle =
-        |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(p.iter().map(|&q| shape.sdf(q)).collect()) };
+    let mut oracle = |p: &[DVec3]| -> Result<Vec<f64>, OracleError> {
+        Ok(p.iter().map(|&q| shape.sdf(q)).collect())
+    };
     ui.say(format!(
         "demo: two overlapping tori (genus 2), their exact SDF asked at most {budget} times where the reconstruction needs it"
     ));

@@ -231,7 +231,11 @@ impl Tuning {
 }
 
 /// Reconstruct with a progress bar over the stages.
-pub(crate) fn run_pipeline(samples: &SdfSamples, params: &Params, ui: &Ui) -> Result<rfta::Reconstruction> {
+pub(crate) fn run_pipeline(
+    samples: &SdfSamples,
+    params: &Params,
+    ui: &Ui,
+) -> Result<rfta::Reconstruction> {
     let bar = ui.progress(params.rounds as u64 + 2, "rfta");
     let b = bar.clone();
     let mut label = String::from("initial");
@@ -378,14 +382,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             report: args.report.as_deref(),
             points: args.points.as_deref(),
         };
-        return crate::plane::reconstruct(
-            &input,
-            &args.output,
-            args.bounds,
-            &params,
-            extras,
-            ui,
-        );
+        return crate::plane::reconstruct(&input, &args.output, args.bounds, &params, extras, ui);
     }
     crate::ui::check_output(&args.output)?;
     if let Some(p) = &args.points {
@@ -433,9 +430,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         Err(e) if matches!(e.downcast_ref(), Some(rfta::Error::NoSurface { .. })) => {
             return no_surface(&args, &e, ui);
         }
-        other => {
-            other.with_context(|| format!("{}: reconstruction failed", input.display()))?
-        }
+        other => other.with_context(|| format!("{}: reconstruction failed", input.display()))?,
     };
     let seconds = t.elapsed().as_secs_f64();
     let title = format!("rfta reconstruct {}", input.display());

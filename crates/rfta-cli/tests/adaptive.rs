@@ -10,18 +10,46 @@ use common::{json, rfta, s, stderr, temp};
 #[test]
 fn from_mesh_reconstructs_within_the_budget() {
     let dir = temp("from-mesh");
-    let (torus, out, report) = (dir.join("torus.obj"), dir.join("out.obj"), dir.join("r.json"));
-    let made = rfta(&["sample", "--shape", "torus", "--res", "4", "-o", s(&dir.join("t.npy")), "--save-mesh", s(&torus)]);
+    let (torus, out, report) = (
+        dir.join("torus.obj"),
+        dir.join("out.obj"),
+        dir.join("r.json"),
+    );
+    let made = rfta(&[
+        "sample",
+        "--shape",
+        "torus",
+        "--res",
+        "4",
+        "-o",
+        s(&dir.join("t.npy")),
+        "--save-mesh",
+        s(&torus),
+    ]);
     assert!(made.status.success(), "{}", stderr(&made));
     let o = rfta(&[
-        "reconstruct", "--from-mesh", s(&torus), "--budget", "2000", "--rounds", "2", "-o",
-        s(&out), "--report", s(&report),
+        "reconstruct",
+        "--from-mesh",
+        s(&torus),
+        "--budget",
+        "2000",
+        "--rounds",
+        "2",
+        "-o",
+        s(&out),
+        "--report",
+        s(&report),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let r = json(&report);
     let evaluations = r["adaptive"]["evaluations"].as_u64().expect("evaluations");
     assert!(evaluations > 1_000 && evaluations <= 2_000, "{evaluations}");
-    assert!(r["adaptive"]["passes"].as_array().is_some_and(|p| p.len() >= 2), "{r}");
+    assert!(
+        r["adaptive"]["passes"]
+            .as_array()
+            .is_some_and(|p| p.len() >= 2),
+        "{r}"
+    );
     assert_eq!(r["watertight"], true);
     let mesh = rfta_io::read_mesh(&out).expect("mesh");
     assert_eq!(rfta_mesh::Topology::of(&mesh).genus(), Some(1));
@@ -45,14 +73,39 @@ fn from_mesh_refuses_what_it_cannot_do() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("<INPUT>"), "{}", stderr(&o));
     let torus = dir.join("torus.obj");
-    let made = rfta(&["sample", "--shape", "torus", "--res", "4", "-o", s(&dir.join("t.npy")), "--save-mesh", s(&torus)]);
+    let made = rfta(&[
+        "sample",
+        "--shape",
+        "torus",
+        "--res",
+        "4",
+        "-o",
+        s(&dir.join("t.npy")),
+        "--save-mesh",
+        s(&torus),
+    ]);
     assert!(made.status.success(), "{}", stderr(&made));
-    let o = rfta(&["reconstruct", "--from-mesh", s(&torus), "--budget", "50", "-o", s(&out)]);
+    let o = rfta(&[
+        "reconstruct",
+        "--from-mesh",
+        s(&torus),
+        "--budget",
+        "50",
+        "-o",
+        s(&out),
+    ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("at least 125"), "{}", stderr(&o));
     assert!(!out.exists());
     // --budget belongs to --from-mesh.
-    let o = rfta(&["reconstruct", s(&dir.join("t.npy")), "--budget", "500", "-o", s(&out)]);
+    let o = rfta(&[
+        "reconstruct",
+        s(&dir.join("t.npy")),
+        "--budget",
+        "500",
+        "-o",
+        s(&out),
+    ]);
     assert!(!o.status.success());
     assert!(!out.exists());
 }
@@ -62,7 +115,16 @@ fn from_mesh_refuses_what_it_cannot_do() {
 fn the_adaptive_demo_finds_both_handles() {
     let dir = temp("demo");
     let out = dir.join("demo.obj");
-    let o = rfta(&["demo", "--adaptive", "--budget", "3000", "--rounds", "2", "-o", s(&out)]);
+    let o = rfta(&[
+        "demo",
+        "--adaptive",
+        "--budget",
+        "3000",
+        "--rounds",
+        "2",
+        "-o",
+        s(&out),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("genus 2"), "{}", stderr(&o));
     let mesh = rfta_io::read_mesh(&out).expect("mesh");

@@ -214,7 +214,8 @@ pub fn reconstruct_cancellable(
 
 /// A last edit of the repaired mesh, in the samples' coordinates, before the verdict measures it
 /// (an adaptive run's thin handles settled by asking the function).
-pub(crate) type Settle<'a> = &'a mut (dyn FnMut(&mut TriMesh, &mut RepairReport) -> Result<()> + Send);
+pub(crate) type Settle<'a> =
+    &'a mut (dyn FnMut(&mut TriMesh, &mut RepairReport) -> Result<()> + Send);
 
 /// [`reconstruct_cancellable`] with a [`Settle`] step.
 pub(crate) fn reconstruct_settling(
@@ -253,7 +254,9 @@ pub(crate) fn reconstruct_settling(
         out.report.consistency.spacing /= factor;
         return Ok(out);
     }
-    pool::on_pool(params.threads, || run(samples, params, progress, cancel, settle))
+    pool::on_pool(params.threads, || {
+        run(samples, params, progress, cancel, settle)
+    })
 }
 
 /// The six steps.

@@ -47,7 +47,11 @@ fn run(shape: Analytic, budget: usize, params: &Params) -> rfta::Result<Adaptive
 
 /// Mean distance of the mesh's vertices to the true surface.
 fn vertex_error(shape: Analytic, mesh: &TriMesh) -> f64 {
-    mesh.vertices.iter().map(|&v| shape.sdf(v).abs()).sum::<f64>() / mesh.n_vertices() as f64
+    mesh.vertices
+        .iter()
+        .map(|&v| shape.sdf(v).abs())
+        .sum::<f64>()
+        / mesh.n_vertices() as f64
 }
 
 /// With the evaluations of a 15^3 grid, the adaptive samples give a thin torus closer to the true
@@ -59,9 +63,16 @@ fn a_torus_from_as_many_evaluations_as_a_grid_is_closer_than_the_grids() {
     let params = params(2);
     let out = run(TORUS, budget, &params).expect("adaptive");
     let report = &out.report;
-    assert!(report.evaluations <= budget, "{} > {budget}", report.evaluations);
+    assert!(
+        report.evaluations <= budget,
+        "{} > {budget}",
+        report.evaluations
+    );
     assert!(report.passes.len() >= 2, "{:?}", report.passes);
-    assert_eq!(out.samples.len(), report.passes.last().map_or(0, |p| p.samples));
+    assert_eq!(
+        out.samples.len(),
+        report.passes.last().map_or(0, |p| p.samples)
+    );
     let mesh = &out.reconstruction.mesh;
     let r = &out.reconstruction.report;
     assert!(r.mesh.watertight && r.mesh.components == 1, "{:?}", r.mesh);
@@ -69,10 +80,15 @@ fn a_torus_from_as_many_evaluations_as_a_grid_is_closer_than_the_grids() {
     assert_eq!(r.consistency.sign_errors, 0);
 
     let grid = Grid::cube(14, -1.0, 1.0).expect("grid");
-    let values = (0..grid.len()).map(|i| TORUS.sdf(grid.position(i))).collect();
+    let values = (0..grid.len())
+        .map(|i| TORUS.sdf(grid.position(i)))
+        .collect();
     let on_grid = rfta::reconstruct(&SdfSamples::grid(grid, values).expect("grid"), &params)
         .expect("grid reconstruction");
-    let (adaptive, gridded) = (vertex_error(TORUS, mesh), vertex_error(TORUS, &on_grid.mesh));
+    let (adaptive, gridded) = (
+        vertex_error(TORUS, mesh),
+        vertex_error(TORUS, &on_grid.mesh),
+    );
     assert!(
         adaptive < gridded,
         "adaptive {adaptive:.5} against the grid's {gridded:.5}"
@@ -115,6 +131,9 @@ fn the_report_counts_every_evaluation() {
     assert!(r.small_components_asked * 2 + r.thin_handles_asked <= out.report.evaluations);
 }
 
+/// A fixed way of answering, for the failure cases.
+type Answer = dyn Fn(&[DVec3]) -> Result<Vec<f64>, OracleError> + Sync;
+
 /// An oracle's error ends the run as `Error::Oracle` carrying it; a NaN, an infinite value or the
 /// wrong number of values is `Error::OracleAnswer` naming the batch; a budget too small, a flat
 /// box and a cancelled run are refused.
@@ -128,10 +147,7 @@ fn a_failing_oracle_is_an_error_naming_the_batch() {
         }
     }
     impl std::error::Error for Down {}
-    let ask = |answer: &(dyn Fn(&[DVec3]) -> Result<Vec<f64>, OracleError> + Sync),
-               budget: usize,
-               bounds: Aabb,
-               cancel: bool| {
+    let ask = |answer: &Answer, budget: usize, bounds: Aabb, cancel: bool| {
         let mut oracle = |p: &[DVec3]| answer(p);
         reconstruct_adaptive(
             &mut oracle,

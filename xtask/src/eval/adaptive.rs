@@ -55,7 +55,9 @@ impl Row {
 
 /// The grid cells per axis whose points number about `budget`.
 fn grid_cells(budget: usize) -> usize {
-    ((budget as f64).cbrt().round() as usize).saturating_sub(1).max(2)
+    ((budget as f64).cbrt().round() as usize)
+        .saturating_sub(1)
+        .max(2)
 }
 
 pub(crate) fn run(
@@ -270,16 +272,30 @@ fn write_markdown(path: &Path, rows: &[Row], budgets: &[usize]) -> Result<()> {
             "| {} ({}) | {} | {} | {} | {}/{} | {} | {} | {} | {:.2}{} |",
             r.shape,
             r.gt_genus.map_or("?".into(), |g| g.to_string()),
-            if r.budget == 0 { "-".into() } else { r.budget.to_string() },
+            if r.budget == 0 {
+                "-".into()
+            } else {
+                r.budget.to_string()
+            },
             r.method,
-            if r.chamfer.is_finite() { format!("{:.6}", r.chamfer) } else { r.status.clone() },
-            summary.and_then(|s| s.genus).map_or("-".into(), |g| g.to_string()),
+            if r.chamfer.is_finite() {
+                format!("{:.6}", r.chamfer)
+            } else {
+                r.status.clone()
+            },
+            summary
+                .and_then(|s| s.genus)
+                .map_or("-".into(), |g| g.to_string()),
             summary.map_or(0, |s| s.components),
             c.map_or("-".into(), |c| c.thin_loops.len().to_string()),
             c.map_or("-".into(), |c| c.sign_errors.to_string()),
             c.map_or("-".into(), |c| c.entered.to_string()),
             r.rfta_seconds,
-            if r.oracle_seconds > 0.0 { format!(" (+{:.2})", r.oracle_seconds) } else { String::new() },
+            if r.oracle_seconds > 0.0 {
+                format!(" (+{:.2})", r.oracle_seconds)
+            } else {
+                String::new()
+            },
         )?;
     }
     std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))?;

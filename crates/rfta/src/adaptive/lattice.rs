@@ -90,10 +90,12 @@ impl Lattice {
     pub(crate) fn new(bounds: Aabb, cells: u32) -> Self {
         let extent = bounds.max - bounds.min;
         let side = extent.max_element() / f64::from(cells);
-        let per_axis = extent.to_array().map(|e| ((e / side).round() as u32).max(1));
-        let step = DVec3::from_array([0, 1, 2].map(|a| {
-            extent[a] / f64::from(per_axis[a]) / f64::from(1u32 << FINEST)
-        }));
+        let per_axis = extent
+            .to_array()
+            .map(|e| ((e / side).round() as u32).max(1));
+        let step = DVec3::from_array(
+            [0, 1, 2].map(|a| extent[a] / f64::from(per_axis[a]) / f64::from(1u32 << FINEST)),
+        );
         let mut leaves = Vec::new();
         for i in 0..per_axis[0] {
             for j in 0..per_axis[1] {
@@ -117,7 +119,8 @@ impl Lattice {
 
     /// Position of a lattice point.
     pub(crate) fn position(&self, key: [u32; 3]) -> DVec3 {
-        self.origin + DVec3::new(f64::from(key[0]), f64::from(key[1]), f64::from(key[2])) * self.step
+        self.origin
+            + DVec3::new(f64::from(key[0]), f64::from(key[1]), f64::from(key[2])) * self.step
     }
 
     /// The value at a lattice point, if asked for.
@@ -193,8 +196,11 @@ impl Lattice {
         gone.sort_unstable();
         gone.dedup();
         self.leaves.retain(|c| gone.binary_search(c).is_err());
-        self.leaves
-            .extend(gone.iter().filter(|c| c.level < FINEST).flat_map(|c| c.children()));
+        self.leaves.extend(
+            gone.iter()
+                .filter(|c| c.level < FINEST)
+                .flat_map(|c| c.children()),
+        );
         self.leaves.sort_unstable();
     }
 
@@ -226,20 +232,33 @@ mod tests {
         let mut lattice = Lattice::new(Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)), 2);
         let corners = lattice.missing_corners();
         assert_eq!(corners.len(), 27);
-        lattice.insert(&corners, &vec![1.0; 27]);
+        lattice.insert(&corners, &[1.0; 27]);
         let cell = lattice.leaves()[0];
         let points = lattice.refinement_points(&[cell]);
         assert_eq!(points.len(), 19);
-        lattice.insert(&points, &vec![1.0; 19]);
+        lattice.insert(&points, &[1.0; 19]);
         lattice.refine(&[cell]);
         assert_eq!(lattice.leaves().len(), 8 - 1 + 8);
-        let children: Vec<Cell> = lattice.leaves().iter().filter(|c| c.level == 1).copied().collect();
+        let children: Vec<Cell> = lattice
+            .leaves()
+            .iter()
+            .filter(|c| c.level == 1)
+            .copied()
+            .collect();
         let volume: u64 = children.iter().map(|c| u64::from(c.side()).pow(3)).sum();
         assert_eq!(volume, u64::from(cell.side()).pow(3));
-        assert!(children.iter().all(|c| c.corners().all(|k| lattice.value(k).is_some())));
+        assert!(
+            children
+                .iter()
+                .all(|c| c.corners().all(|k| lattice.value(k).is_some()))
+        );
         // A neighbour's refinement reuses the shared face's points: 27 - 9 - 8 + 4 = 12 new ones
         // (the shared face's 9 are known, and the corners not on it are the 4 base ones more).
-        let neighbour = *lattice.leaves().iter().find(|c| c.level == 0).expect("a base cell");
+        let neighbour = *lattice
+            .leaves()
+            .iter()
+            .find(|c| c.level == 0)
+            .expect("a base cell");
         assert!(lattice.refinement_points(&[neighbour]).len() < 19);
         assert_eq!(lattice.finest_spacing(), 0.5);
     }

@@ -23,8 +23,8 @@
 //! deterministic oracle gives the same samples and the same mesh on any number of threads.
 //! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
 
-mod settle;
 mod lattice;
+mod settle;
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -181,7 +181,10 @@ pub fn reconstruct_adaptive(
     };
     // Kept for the final pass's questions about thin handles.
     let reserve = (budget.evaluations as f64 * HANDLE_SHARE) as usize;
-    let usable = budget.evaluations.saturating_sub(reserve).max(lattice.len());
+    let usable = budget
+        .evaluations
+        .saturating_sub(reserve)
+        .max(lattice.len());
     loop {
         // A pass spends about what all before it did: the reconstructions cost about twice the
         // last one's, and the error halves where it matters at each pass.

@@ -69,7 +69,10 @@ pub(crate) fn settle_components(
         let mut vertices: Vec<u32> = faces.iter().flat_map(|&f| mesh.faces[f]).collect();
         vertices.sort_unstable();
         vertices.dedup();
-        let points: Vec<DVec3> = vertices.iter().map(|&v| mesh.vertices[v as usize]).collect();
+        let points: Vec<DVec3> = vertices
+            .iter()
+            .map(|&v| mesh.vertices[v as usize])
+            .collect();
         let bounds = rfta_geom::Aabb::from_points(&points);
         let diagonal = (bounds.max - bounds.min).length();
         if diagonal < small {
@@ -81,7 +84,8 @@ pub(crate) fn settle_components(
             // body's nearest point.
             let towards = main.closest_point(centre).point;
             let reach = (towards - centre).length();
-            let wall = centre + (towards - centre) * ((0.5 * diagonal / reach).min(1.0) + 1.0) / 2.0;
+            let wall =
+                centre + (towards - centre) * ((0.5 * diagonal / reach).min(1.0) + 1.0) / 2.0;
             questions.push((c, centre, wall, diagonal, void, nested));
         }
     }
@@ -155,9 +159,7 @@ pub(crate) fn settle(
         }
         let centres: Vec<DVec3> = cycles
             .iter()
-            .map(|c| {
-                c.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / c.len() as f64
-            })
+            .map(|c| c.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / c.len() as f64)
             .collect();
         let truth = ask(&centres)?;
         settled.asked += centres.len();
@@ -201,8 +203,7 @@ mod tests {
         // loop around the tube (length 0.63) has its centre on the tube's centre line.
         let mut confirmed = torus.clone();
         let mut tube = |p: &[DVec3]| -> Result<Vec<f64>> {
-            Ok(p
-                .iter()
+            Ok(p.iter()
                 .map(|q| (DVec3::new(q.x, q.y, 0.0).length() - 1.0).hypot(q.z) - 0.1)
                 .collect())
         };
@@ -248,8 +249,7 @@ mod tests {
         // Material in the big sphere but a void of radius 0.05 at `void`, and around x = -3 (a
         // second small ball).
         let mut truth = |p: &[DVec3]| -> Result<Vec<f64>> {
-            Ok(p
-                .iter()
+            Ok(p.iter()
                 .map(|q| {
                     let shell = (q.length() - 1.0).max(0.05 - (*q - void).length());
                     shell.min((*q - DVec3::new(-3.0, 0.0, 0.0)).length() - 0.05)
@@ -268,5 +268,4 @@ mod tests {
         let none = settle_components(&mut twice, 0.05, 100, &mut truth).expect("settle");
         assert_eq!(none, (0, 0));
     }
-
 }
