@@ -315,6 +315,15 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
             if r.repair.cavities_opened == 1 { "y" } else { "ies" }
         ));
     }
+    if r.repair.small_components_asked + r.repair.thin_handles_asked > 0 {
+        ui.say(format!(
+            "asked the SDF about {} small component(s) and {} thin handle(s): removed {} and cut {} it contradicts",
+            r.repair.small_components_asked,
+            r.repair.thin_handles_asked,
+            r.repair.small_components_removed,
+            r.repair.thin_handles_cut
+        ));
+    }
     if r.repair.components_joined + r.repair.handles_cut > 0 {
         ui.say(format!(
             "to reach the genus asked: joined {} component(s) to the largest, cut {} handle(s)",

@@ -383,9 +383,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 5 + 3 + 3 + 9 fields, the mesh check's 6, the consistency check's 6
+        // The stages' 4 + 5 + 3 + 3 + 13 fields, the mesh check's 6, the consistency check's 6
         // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 5 + 3 + 3 + 9 + 6 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 5 + 3 + 3 + 13 + 6 + 6 + 2, "{text}");
     }
 
     #[test]
