@@ -3,18 +3,13 @@
 
 mod common;
 
+use std::path::{Path, PathBuf};
+
 use common::{json, rfta, s, stderr, temp};
 
-/// A torus mesh's exact SDF asked at most 2,000 times: a watertight genus-1 mesh near the torus,
-/// the report's adaptive section counting the evaluations within the budget.
-#[test]
-fn from_mesh_reconstructs_within_the_budget() {
-    let dir = temp("from-mesh");
-    let (torus, out, report) = (
-        dir.join("torus.obj"),
-        dir.join("out.obj"),
-        dir.join("r.json"),
-    );
+/// The built-in torus as a mesh (and its 5^3 grid, `t.npy`) in `dir`.
+fn torus_mesh(dir: &Path) -> PathBuf {
+    let torus = dir.join("torus.obj");
     let made = rfta(&[
         "sample",
         "--shape",
@@ -27,6 +22,15 @@ fn from_mesh_reconstructs_within_the_budget() {
         s(&torus),
     ]);
     assert!(made.status.success(), "{}", stderr(&made));
+    torus
+}
+
+/// A torus mesh's exact SDF asked at most 2,000 times: a watertight genus-1 mesh near the torus,
+/// the report's adaptive section counting the evaluations within the budget.
+#[test]
+fn from_mesh_reconstructs_within_the_budget() {
+    let dir = temp("from-mesh");
+    let (torus, out, report) = (torus_mesh(&dir), dir.join("out.obj"), dir.join("r.json"));
     let o = rfta(&[
         "reconstruct",
         "--from-mesh",
@@ -72,19 +76,7 @@ fn from_mesh_refuses_what_it_cannot_do() {
     let o = rfta(&["reconstruct", "-o", s(&out)]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("<INPUT>"), "{}", stderr(&o));
-    let torus = dir.join("torus.obj");
-    let made = rfta(&[
-        "sample",
-        "--shape",
-        "torus",
-        "--res",
-        "4",
-        "-o",
-        s(&dir.join("t.npy")),
-        "--save-mesh",
-        s(&torus),
-    ]);
-    assert!(made.status.success(), "{}", stderr(&made));
+    let torus = torus_mesh(&dir);
     let o = rfta(&[
         "reconstruct",
         "--from-mesh",

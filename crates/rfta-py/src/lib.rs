@@ -241,22 +241,26 @@ fn reconstruct<'py>(
     let out = detached(py, progress, |progress, cancel| {
         rfta::reconstruct_cancellable(&samples, &params, progress, cancel)
     })?;
-    let (v_f, p, n) = (
-        mesh_arrays(py, &out.mesh)?,
-        rows(py, &out.points.points)?,
-        rows(py, &out.points.normals)?,
-    );
-    let report = report_dict(py, &out.report, samples.as_grid().is_some())?;
     PyTuple::new(
         py,
-        [
-            v_f.get_item(0)?,
-            v_f.get_item(1)?,
-            p.into_any(),
-            n.into_any(),
-            report.into_any(),
-        ],
+        reconstruction_items(py, &out, samples.as_grid().is_some())?,
     )
+}
+
+/// `(V, F, P, N, report)` of a reconstruction.
+fn reconstruction_items<'py>(
+    py: Python<'py>,
+    out: &rfta::Reconstruction,
+    grid: bool,
+) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    let v_f = mesh_arrays(py, &out.mesh)?;
+    Ok(vec![
+        v_f.get_item(0)?,
+        v_f.get_item(1)?,
+        rows(py, &out.points.points)?.into_any(),
+        rows(py, &out.points.normals)?.into_any(),
+        report_dict(py, &out.report, grid)?.into_any(),
+    ])
 }
 
 /// Reconstructs from an SDF that can be asked (`rfta::adaptive`): `sdf` takes an (n, 3)
@@ -305,31 +309,15 @@ fn reconstruct_adaptive<'py>(
         return Err(e);
     }
     let out = out?;
-    let rec = &out.reconstruction;
-    let (v_f, p, n) = (
-        mesh_arrays(py, &rec.mesh)?,
-        rows(py, &rec.points.points)?,
-        rows(py, &rec.points.normals)?,
-    );
-    let report = report_dict(py, &rec.report, false)?;
     let text =
         serde_json::to_string(&out.report).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    let adaptive = py.import("json")?.call_method1("loads", (text,))?;
-    let positions = rows(py, &out.samples.positions())?;
-    let values = PyArray1::from_slice(py, out.samples.values());
-    PyTuple::new(
-        py,
-        [
-            v_f.get_item(0)?,
-            v_f.get_item(1)?,
-            p.into_any(),
-            n.into_any(),
-            report.into_any(),
-            adaptive,
-            positions.into_any(),
-            values.into_any(),
-        ],
-    )
+    let mut items = reconstruction_items(py, &out.reconstruction, false)?;
+    items.extend([
+        py.import("json")?.call_method1("loads", (text,))?,
+        rows(py, &out.samples.positions())?.into_any(),
+        PyArray1::from_slice(py, out.samples.values()).into_any(),
+    ]);
+    PyTuple::new(py, items)
 }
 
 /// One batch: the points as an (n, 3) float64 array, the answer through `numpy.asarray` as
