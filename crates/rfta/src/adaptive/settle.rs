@@ -9,19 +9,25 @@
 //! surface sealed) and is removed.
 //!
 //! A loop around a handle thinner than the samples resolve is a bar of material or a tunnel
-//! through it, and the function at the loop's centre says which it should be.
-//! The loop around a bar has its centre inside the bar, the loop around a tunnel in the tunnel's
-//! empty space; the mesh's own signed distance at the centre says which the mesh made. Where the
-//! function's sign there disagrees (a bar where the function is outside, a tunnel where it is
-//! inside), the handle is an artifact of the reconstruction and is cut along its loop
-//! (`rfta_mesh::cut_along`: the bar cut through, the tunnel filled, both sides capped); where it
-//! agrees, the handle is the shape's and stays.
+//! through it, and the function at the loop's centre says which it should be. The loop around a
+//! bar has its centre inside the bar, the loop around a tunnel in the tunnel's empty space; the
+//! mesh's own signed distance at the centre says which the mesh made. A real bar or tunnel of
+//! radius `r` (its loop `2 pi r` long) has the function about `r` deep on its side at its centre.
+//! Where the function is on the other side (a bar where it is outside, a tunnel where it is
+//! inside), less than `r / 4` deep, or more than `4 r` (a handle far thinner than what the
+//! function has there: a sample at its centre cannot tell it from the surface it sits on, and
+//! the function's depth belongs to something else), the handle is an artifact of the
+//! reconstruction and is cut along its loop (`rfta_mesh::cut_along`: the bar cut through, the
+//! tunnel filled, both sides capped); otherwise it is the shape's and stays.
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 use rfta_mesh::MeshIndex;
 
 use crate::Result;
+
+/// The depths, in handle radii, at which the function confirms a thin handle at its centre.
+const DEPTH_RANGE: [f64; 2] = [0.25, 4.0];
 
 /// Rounds of loops searched, asked and cut at most (each cut changes the loops left).
 const ROUNDS: usize = 12;
@@ -167,8 +173,13 @@ pub(crate) fn settle(
         // Loops that share no vertex are cut in one round (disjoint and independent).
         let mut touched = vec![false; mesh.vertices.len()];
         let mut cut = 0;
-        for ((cycle, f), d) in cycles.iter().zip(&truth).zip(&made) {
-            let artifact = *f != 0.0 && (*f > 0.0) != (*d > 0.0);
+        for (((cycle, f), d), length) in cycles.iter().zip(&truth).zip(&made).zip(&loops.lengths) {
+            // A real bar or tunnel of radius r = length / 2 pi has the function about r deep on
+            // its side at its centre: between r / 4 and 4 r is asked for.
+            let r = length / std::f64::consts::TAU;
+            let deep = if *d < 0.0 { -*f } else { *f };
+            let confirmed = (DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep);
+            let artifact = !confirmed;
             if !artifact || cycle.iter().any(|&v| touched[v as usize]) {
                 continue;
             }
