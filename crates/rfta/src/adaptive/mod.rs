@@ -244,10 +244,10 @@ fn final_pass(
     let cancel = asker.cancel;
     let mut settle = |mesh: &mut rfta_geom::TriMesh, repair: &mut crate::RepairReport| {
         let mut ask = |p: &[DVec3]| asker.values(p);
-        let (asked, removed) = settle::settle_components(mesh, small, left, &mut ask)?;
+        let (asked, removed) = settle::settle_components(mesh, &samples, small, left, &mut ask)?;
         repair.small_components_asked = asked;
         repair.small_components_removed = removed;
-        let s = settle::settle(mesh, bound, gap, left - 2 * asked, &mut ask)?;
+        let s = settle::settle(mesh, &samples, bound, gap, left - 2 * asked, &mut ask)?;
         repair.thin_handles_asked = s.asked;
         repair.thin_handles_cut = s.cut;
         repair.cavities = rfta_mesh::cavities(mesh).len();

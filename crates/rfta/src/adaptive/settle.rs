@@ -20,14 +20,18 @@
 //! reconstruction and is cut along its loop (`rfta_mesh::cut_along`: the bar cut through, the
 //! tunnel filled, both sides capped); otherwise it is the shape's and stays.
 
-use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
+use rfta_geom::{SdfSamples, TriMesh};
 use rfta_mesh::MeshIndex;
 
 use crate::Result;
 
 /// The depths, in handle radii, at which the function confirms a thin handle at its centre.
 const DEPTH_RANGE: [f64; 2] = [0.25, 4.0];
+
+/// A sample within this many handle radii (plus its own value) of a thin handle's centre, on the
+/// handle's side, keeps the handle.
+const WITNESS_REACH: f64 = 2.0;
 
 /// Rounds of loops searched, asked and cut at most (each cut changes the loops left).
 const ROUNDS: usize = 12;
@@ -47,6 +51,7 @@ const DEPTH: f64 = 1.0 / 8.0;
 /// The oracle's.
 pub(crate) fn settle_components(
     mesh: &mut TriMesh,
+    samples: &SdfSamples,
     small: f64,
     max_asks: usize,
     ask: &mut dyn FnMut(&[DVec3]) -> Result<Vec<f64>>,
@@ -81,9 +86,9 @@ pub(crate) fn settle_components(
             .collect();
         let bounds = rfta_geom::Aabb::from_points(&points);
         let diagonal = (bounds.max - bounds.min).length();
-        if diagonal < small {
+        let void = rfta_mesh::signed_volume(mesh, faces) < 0.0;
+        if diagonal < small && !witnessed(mesh, faces, bounds, void, samples)? {
             let centre = points.iter().sum::<DVec3>() / points.len() as f64;
-            let void = rfta_mesh::signed_volume(mesh, faces) < 0.0;
             // A part must lie outside the main body, a void inside it.
             let nested = main.signed_distance(centre) < 0.0;
             // The wall between a void and the outside: halfway from the shell to the main
@@ -128,6 +133,32 @@ pub(crate) fn settle_components(
     Ok((questions.len(), removed))
 }
 
+/// Whether a sample of the component's inside sign lies in it (negative in a part, positive in a
+/// void): the samples themselves support it, and removing it would put that sample on the wrong
+/// side.
+fn witnessed(
+    mesh: &TriMesh,
+    faces: &[usize],
+    bounds: rfta_geom::Aabb,
+    void: bool,
+    samples: &SdfSamples,
+) -> Result<bool> {
+    let inside: Vec<DVec3> = (0..samples.len())
+        .filter(|&i| (samples.values()[i] > 0.0) == void && samples.values()[i] != 0.0)
+        .map(|i| samples.position(i))
+        .filter(|&p| p.cmpge(bounds.min).all() && p.cmple(bounds.max).all())
+        .collect();
+    if inside.is_empty() {
+        return Ok(false);
+    }
+    let part = TriMesh {
+        vertices: mesh.vertices.clone(),
+        faces: faces.iter().map(|&f| mesh.faces[f]).collect(),
+    };
+    let index = MeshIndex::new(&part)?;
+    Ok(inside.iter().any(|&p| index.winding_number(p).abs() > 0.5))
+}
+
 /// What [`settle`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct Settled {
@@ -144,6 +175,7 @@ pub(crate) struct Settled {
 /// The oracle's.
 pub(crate) fn settle(
     mesh: &mut TriMesh,
+    samples: &SdfSamples,
     bound: f64,
     gap: f64,
     max_asks: usize,
@@ -173,12 +205,27 @@ pub(crate) fn settle(
         // Loops that share no vertex are cut in one round (disjoint and independent).
         let mut touched = vec![false; mesh.vertices.len()];
         let mut cut = 0;
-        for (((cycle, f), d), length) in cycles.iter().zip(&truth).zip(&made).zip(&loops.lengths) {
+        for (k, (((cycle, f), d), length)) in cycles
+            .iter()
+            .zip(&truth)
+            .zip(&made)
+            .zip(&loops.lengths)
+            .enumerate()
+        {
             // A real bar or tunnel of radius r = length / 2 pi has the function about r deep on
             // its side at its centre: between r / 4 and 4 r is asked for.
             let r = length / std::f64::consts::TAU;
             let deep = if *d < 0.0 { -*f } else { *f };
-            let confirmed = (DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep);
+            // A sample of the handle's own side near its centre (material in a bar, empty space
+            // in a tunnel) supports it too: cutting would put that sample on the wrong side.
+            let centre = centres[k];
+            let witness = (0..samples.len()).any(|i| {
+                let v = samples.values()[i];
+                v != 0.0
+                    && (v < 0.0) == (*d < 0.0)
+                    && samples.position(i).distance(centre) < WITNESS_REACH * r + v.abs()
+            });
+            let confirmed = witness || (DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep);
             let artifact = !confirmed;
             if !artifact || cycle.iter().any(|&v| touched[v as usize]) {
                 continue;
@@ -205,6 +252,15 @@ mod tests {
     use super::*;
     use rfta_geom::shapes;
 
+    /// Two samples far from every test shape: nothing witnessed.
+    fn far() -> SdfSamples {
+        SdfSamples::scattered(
+            vec![DVec3::splat(10.0), DVec3::splat(-10.0)],
+            vec![1.0, -1.0],
+        )
+        .expect("samples")
+    }
+
     /// A torus whose tube the function says is empty space loses its handle; a torus the
     /// function agrees with keeps it.
     #[test]
@@ -218,21 +274,37 @@ mod tests {
                 .map(|q| (DVec3::new(q.x, q.y, 0.0).length() - 1.0).hypot(q.z) - 0.1)
                 .collect())
         };
-        let s = settle(&mut confirmed, 1.0, 0.01, 100, &mut tube).expect("settle");
+        let s = settle(&mut confirmed, &far(), 1.0, 0.01, 100, &mut tube).expect("settle");
         assert_eq!(s, Settled { asked: 1, cut: 0 });
         assert_eq!(rfta_mesh::Topology::of(&confirmed).genus(), Some(1));
 
         let mut contradicted = torus.clone();
         let mut empty = |p: &[DVec3]| -> Result<Vec<f64>> { Ok(vec![0.5; p.len()]) };
-        let s = settle(&mut contradicted, 1.0, 0.01, 100, &mut empty).expect("settle");
+        let s = settle(&mut contradicted, &far(), 1.0, 0.01, 100, &mut empty).expect("settle");
         assert_eq!(s, Settled { asked: 1, cut: 1 });
         assert_eq!(rfta_mesh::Topology::of(&contradicted).genus(), Some(0));
         assert!(rfta_mesh::Topology::of(&contradicted).is_watertight());
 
         // No loop shorter than the bound: nothing asked.
         let mut long = torus;
-        let s = settle(&mut long, 0.5, 0.01, 100, &mut empty).expect("settle");
+        let s = settle(&mut long, &far(), 0.5, 0.01, 100, &mut empty).expect("settle");
         assert_eq!(s, Settled::default());
+
+        // Inside samples along the tube, where the function says empty space: the samples keep
+        // the handle (cutting would put one of them on the wrong side).
+        let mut witnessed = shapes::torus(1.0, 0.1, 64, 16);
+        let mut along: Vec<DVec3> = (0..64)
+            .map(|i| {
+                let t = f64::from(i) * std::f64::consts::TAU / 64.0;
+                DVec3::new(t.cos(), t.sin(), 0.0)
+            })
+            .collect();
+        along.push(DVec3::splat(10.0));
+        let mut values = vec![-0.1; 64];
+        values.push(1.0);
+        let inside = SdfSamples::scattered(along, values).expect("samples");
+        let s = settle(&mut witnessed, &inside, 1.0, 0.01, 100, &mut empty).expect("settle");
+        assert_eq!(s, Settled { asked: 1, cut: 0 });
     }
 
     /// Beside a large sphere, a small ball the function puts outside is removed, one it puts
@@ -267,16 +339,27 @@ mod tests {
                 })
                 .collect())
         };
-        let (asked, removed) = settle_components(&mut mesh, 0.5, 100, &mut truth).expect("settle");
+        let (asked, removed) =
+            settle_components(&mut mesh, &far(), 0.5, 100, &mut truth).expect("settle");
         assert_eq!((asked, removed), (4, 2));
         assert_eq!(rfta_mesh::face_components(&mesh).len(), 3);
         assert!(mesh.vertices.iter().any(|v| (*v - void).length() < 0.1));
         assert!(mesh.vertices.iter().any(|v| (v.x + 3.0).abs() < 0.1));
         assert_eq!(mesh.unreferenced_vertices(), 0);
         // Too large to ask about: nothing asked.
-        let mut twice = big;
+        let mut twice = big.clone();
         twice.append(&ball(DVec3::new(3.0, 0.0, 0.0)));
-        let none = settle_components(&mut twice, 0.05, 100, &mut truth).expect("settle");
+        let none = settle_components(&mut twice, &far(), 0.05, 100, &mut truth).expect("settle");
         assert_eq!(none, (0, 0));
+        // A ball the function puts outside but an inside sample holds: kept, not asked about.
+        let mut held = big;
+        held.append(&ball(DVec3::new(3.0, 0.0, 0.0)));
+        let witness = SdfSamples::scattered(
+            vec![DVec3::new(3.0, 0.0, 0.0), DVec3::splat(10.0)],
+            vec![-0.01, 1.0],
+        )
+        .expect("samples");
+        let kept = settle_components(&mut held, &witness, 0.5, 100, &mut truth).expect("settle");
+        assert_eq!(kept, (0, 0));
     }
 }
