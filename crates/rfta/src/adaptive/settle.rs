@@ -29,7 +29,7 @@ use crate::Result;
 /// The depths, in handle radii, at which the function confirms a thin handle at its centre.
 const DEPTH_RANGE: [f64; 2] = [0.25, 4.0];
 
-/// A sample within this many handle radii (plus its own value) of a thin handle's centre, on the
+/// A sample within this many handle radii of a thin handle's centre, on the
 /// handle's side, keeps the handle.
 const WITNESS_REACH: f64 = 2.0;
 
@@ -223,7 +223,7 @@ pub(crate) fn settle(
                 let v = samples.values()[i];
                 v != 0.0
                     && (v < 0.0) == (*d < 0.0)
-                    && samples.position(i).distance(centre) < WITNESS_REACH * r + v.abs()
+                    && samples.position(i).distance(centre) < WITNESS_REACH * r
             });
             let confirmed = witness || (DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep);
             let artifact = !confirmed;
