@@ -39,19 +39,7 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
     crate::ui::check_output(&args.output)?;
     let mut mesh = rfta_io::read_mesh(mesh_path)?;
     let name = mesh_path.display().to_string();
-    let topology = Topology::of(&mesh);
-    if topology.is_watertight() && mesh.signed_volume() < 0.0 {
-        ui.say(format!(
-            "warning: {name} is inside out: its faces are flipped so that inside is negative"
-        ));
-        mesh.flip();
-    }
-    if !topology.is_watertight() {
-        ui.say(format!(
-            "warning: {name} is not watertight ({} boundary, {} non-manifold edges): the sign comes from the winding number, which is only approximate near holes",
-            topology.boundary_edges, topology.nonmanifold_edges
-        ));
-    }
+    crate::sample::as_sdf_source(&mut mesh, &name, ui);
     let index =
         MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
     let bounds = match args.bounds {

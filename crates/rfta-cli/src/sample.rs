@@ -53,6 +53,28 @@ pub(crate) struct Args {
     save_mesh: Option<PathBuf>,
 }
 
+/// Readies a mesh whose signed distance is to be measured (`sample`, `reconstruct --from-mesh`):
+/// an inside-out closed mesh is flipped so that inside is negative (a grid of "outside" would
+/// describe no surface, hostile test D5), and a mesh that is not watertight is warned about.
+pub(crate) fn as_sdf_source(mesh: &mut TriMesh, name: &str, ui: &Ui) {
+    let topo = Topology::of(mesh);
+    // An inside-out closed mesh has winding number -1 inside: every sample would come out
+    // positive, a grid of "outside" that describes no surface (hostile test D5).
+    if topo.is_watertight() && mesh.signed_volume() < 0.0 {
+        ui.say(format!(
+            "warning: {name} is inside out (its faces enclose a volume of {:.6}): sampled with its faces flipped, so that inside is negative",
+            mesh.signed_volume()
+        ));
+        mesh.flip();
+    }
+    if !topo.is_watertight() {
+        ui.say(format!(
+            "warning: {name} is not watertight ({} boundary, {} non-manifold edges): the sign comes from the winding number, which is only approximate near holes",
+            topo.boundary_edges, topo.nonmanifold_edges
+        ));
+    }
+}
+
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     if args.res == 0 {
         bail!("--res must be at least 1 (the grid has res + 1 samples per axis)");
@@ -78,22 +100,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         rfta_io::write_mesh(path, &mesh)?;
         ui.say(format!("wrote {}", path.display()));
     }
-    let topo = Topology::of(&mesh);
-    // An inside-out closed mesh has winding number -1 inside: every sample would come out
-    // positive, a grid of "outside" that describes no surface (hostile test D5).
-    if topo.is_watertight() && mesh.signed_volume() < 0.0 {
-        ui.say(format!(
-            "warning: {name} is inside out (its faces enclose a volume of {:.6}): sampled with its faces flipped, so that inside is negative",
-            mesh.signed_volume()
-        ));
-        mesh.flip();
-    }
-    if !topo.is_watertight() {
-        ui.say(format!(
-            "warning: {name} is not watertight ({} boundary, {} non-manifold edges): the sign comes from the winding number, which is only approximate near holes",
-            topo.boundary_edges, topo.nonmanifold_edges
-        ));
-    }
+    as_sdf_source(&mut mesh, &name, ui);
     let bounds = args.bounds.unwrap_or_default();
     let grid =
         Grid::from_bounds([args.res + 1; 3], bounds.min, bounds.max).context("invalid grid")?;

@@ -4,6 +4,7 @@ Run: pip install crates/rfta-py[test] && pytest crates/rfta-py/tests
 (RFTA_BIN names the rfta binary for the CLI comparison; `cargo xtask ci` sets it.)
 """
 
+import contextlib
 import inspect
 import json
 import os
@@ -23,6 +24,21 @@ def grid(n, lo=-1.0, hi=1.0):
     """The points of linspace(lo, hi, n + 1)^3 as numpy's meshgrid(indexing="ij") gives them."""
     g = np.linspace(lo, hi, n + 1)
     return np.stack(np.meshgrid(g, g, g, indexing="ij"), -1)
+
+
+@contextlib.contextmanager
+def interrupted_after(seconds):
+    """Ctrl-C (SIGINT to this process) after `seconds`. A shell that starts the tests in the
+    background ignores SIGINT, and Python then keeps it ignored: the handler that raises
+    KeyboardInterrupt is installed for the block's length."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(seconds, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
 
 
 def torus_sdf(p, R=0.5, r=0.2):
@@ -297,18 +313,9 @@ def test_progress_is_reported_and_an_exception_in_it_stops_the_run():
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT by os.kill")
 def test_ctrl_c_stops_a_long_run():
     S = torus_sdf(grid(40))
-    # A shell that starts this in the background ignores SIGINT, and Python then keeps it
-    # ignored: install the handler that raises KeyboardInterrupt for the test's length.
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
-    timer.start()
     start = time.time()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            rfta.reconstruct(S, preset="paper", threads=1)
-    finally:
-        timer.cancel()
-        signal.signal(signal.SIGINT, previous)
+    with interrupted_after(0.5), pytest.raises(KeyboardInterrupt):
+        rfta.reconstruct(S, preset="paper", threads=1)
     # The paper preset at 41^3 takes far longer; the run stops at the next round.
     assert time.time() - start < 30
 
@@ -473,14 +480,7 @@ def test_ctrl_c_stops_an_adaptive_run_between_batches():
         time.sleep(0.05)
         return torus_sdf(p)
 
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
-    timer.start()
     t = time.perf_counter()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            rfta.reconstruct(sdf=slow, budget=200_000)
-    finally:
-        timer.cancel()
-        signal.signal(signal.SIGINT, previous)
+    with interrupted_after(0.5), pytest.raises(KeyboardInterrupt):
+        rfta.reconstruct(sdf=slow, budget=200_000)
     assert started.is_set() and time.perf_counter() - t < 30

@@ -387,7 +387,6 @@ fn refine_where_wrong(
     };
     let mut scored: Vec<(f64, Cell)> = candidates
         .iter()
-        .filter(|&&c| lattice.may_hold_surface(c))
         .map(|&c| {
             let e = c
                 .corners()
