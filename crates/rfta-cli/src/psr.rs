@@ -11,7 +11,8 @@ pub(crate) enum Preset {
     /// PoissonRecon's defaults (depth 8, screening 2, box 1.1).
     Poissonrecon,
     /// The setting `rfta reconstruct` runs (box 3.2 and degree 1 as the Reach for the Arcs
-    /// reference, screening 30 in this solver's units; depth 10 unless --depth).
+    /// reference; depth 10 unless --depth; screening 30 in this solver's units up to depth 9,
+    /// halved for each depth beyond).
     Rfta,
 }
 
@@ -65,7 +66,11 @@ pub(crate) fn run(args: Args, ui: &crate::ui::Ui) -> anyhow::Result<()> {
     crate::ui::check_output(&args.output)?;
     let mut params = match args.preset {
         Preset::Poissonrecon => SpsrParams::default(),
-        Preset::Rfta => rfta::Params::default().spsr_params(None),
+        Preset::Rfta => rfta::Params {
+            spsr_depth: args.depth,
+            ..rfta::Params::default()
+        }
+        .spsr_params(None),
     };
     if let Some(d) = args.depth {
         params.depth = d;

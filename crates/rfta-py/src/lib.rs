@@ -501,7 +501,11 @@ fn screened_poisson<'py>(
 ) -> PyResult<Bound<'py, PyTuple>> {
     let mut params = match preset {
         "poissonrecon" => rfta_spsr::SpsrParams::default(),
-        "rfta" => rfta::Params::default().spsr_params(None),
+        "rfta" => rfta::Params {
+            spsr_depth: depth,
+            ..rfta::Params::default()
+        }
+        .spsr_params(None),
         other => {
             return Err(PyValueError::new_err(format!(
                 "preset '{other}' is not one of 'poissonrecon', 'rfta'"

@@ -29,10 +29,11 @@ pub struct Params {
     pub max_points_per_sphere: usize,
     /// Spheres in each feasibility batch, drawn with replacement, the paper's `b` (10^4; 0 = all).
     pub batch_size: usize,
-    /// Screening weight of the Poisson solves, in `rfta-spsr`'s units (30). The reference runs
-    /// PoissonRecon with 10; on the same tangency points in the reference's setting (box 3.2) our
-    /// solver needs about 30 for the same fit (bunny, N = 30: PoissonRecon at 10 reaches Chamfer
-    /// 0.00717, ours 0.00905 at 10 and 0.00679 at 30; see docs/spsr.md).
+    /// Screening weight of the Poisson solves, in `rfta-spsr`'s units (30), at depths up to
+    /// [`SCREENING_FULL_DEPTH`]; each depth beyond halves it ([`screening_at`]). The reference
+    /// runs PoissonRecon with 10; on the same tangency points in the reference's setting (box
+    /// 3.2) our solver needs about 30 for the same fit (bunny, N = 30: PoissonRecon at 10 reaches
+    /// Chamfer 0.00717, ours 0.00905 at 10 and 0.00679 at 30; see docs/spsr.md).
     pub screening: f64,
     /// Octree depth of the Poisson solves, on a box 3.2 times the unit box as in the reference;
     /// `None` matches it to the sample spacing ([`spsr_depth_for`]). The reference always runs 10.
@@ -196,6 +197,25 @@ pub const SPSR_FULL_DEPTH: u32 = 3;
 /// within 2% (N = 10 to 50: +0.3%, -1.2%, -0.1%, +1.6%) for 13 to 21% less time.
 pub const ROUND_SWEEPS: usize = 4;
 
+/// The deepest Poisson solve that runs the full [`Params::screening`]; each depth beyond halves
+/// it ([`screening_at`]).
+///
+/// Measured on the dev shapes (docs/faithfulness.md): at 30 on depth 11 (N = 100) a surface that
+/// follows a stray tangency point grows a fin or a thin handle in the gaps between sample
+/// spheres, the cut rule moves the neighbouring spheres' points onto it and the next solve
+/// follows them (knight: points more than half a spacing off the true surface 12 to 396 over the
+/// ten rounds, 23,955 spheres entered at the end, genus 7 instead of 0); weaker screening there
+/// leaves such a point to its neighbours. Up to depth 9 (N = 30) 30 is the most accurate; at
+/// depth 10 (N = 50) 15 is more accurate than 30 and gets more genera right.
+pub const SCREENING_FULL_DEPTH: u32 = 9;
+
+/// The screening weight the solves at `depth` run for a [`Params::screening`] of `screening`:
+/// itself up to [`SCREENING_FULL_DEPTH`], halved for each depth beyond.
+pub fn screening_at(screening: f64, depth: u32) -> f64 {
+    let beyond = depth.saturating_sub(SCREENING_FULL_DEPTH);
+    screening / f64::from(1u32 << beyond.min(16))
+}
+
 /// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
 /// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
 pub fn spsr_depth_for(h: f64) -> u32 {
@@ -302,7 +322,8 @@ impl Params {
 
     /// The screened Poisson settings the pipeline runs, for samples `spacing` apart in the unit
     /// box (`None`: unknown, depth 10 as the reference): the reference's box and degree, our
-    /// screening, [`Params::spsr_depth`] or the depth matched to the spacing, and complete grids
+    /// screening at that depth ([`screening_at`]), [`Params::spsr_depth`] or the depth matched to
+    /// the spacing, and complete grids
     /// up to depth [`SPSR_FULL_DEPTH`]. `rfta psr --preset rfta` runs the same.
     pub fn spsr_params(&self, spacing: Option<f64>) -> SpsrParams {
         let depth = self
@@ -310,7 +331,7 @@ impl Params {
             .unwrap_or_else(|| spacing.map_or(10, spsr_depth_for));
         SpsrParams {
             depth,
-            screening: self.screening,
+            screening: screening_at(self.screening, depth),
             box_scale: SPSR_BOX,
             full_depth: SPSR_FULL_DEPTH,
             ..SpsrParams::rfta_reference()
@@ -413,6 +434,19 @@ impl Seeds {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn screening_halves_with_each_depth_beyond_the_full_one() {
+        // 30 up to depth 9 (N = 30 and coarser), then 15, 7.5 (N = 100, the 129^3 grid), 3.75.
+        for (depth, want) in [(5, 30.0), (9, 30.0), (10, 15.0), (11, 7.5), (12, 3.75)] {
+            assert_eq!(screening_at(30.0, depth), want, "depth {depth}");
+        }
+        let p = Params::default();
+        assert_eq!(p.spsr_params(Some(1.0 / 30.0)).screening, 30.0);
+        assert_eq!(p.spsr_params(Some(1.0 / 100.0)).screening, 7.5);
+        assert_eq!(p.round_spsr_params(Some(1.0 / 100.0)).screening, 7.5);
+        assert_eq!(screening_at(1.0, 60), 1.0 / 65536.0);
+    }
 
     #[test]
     fn the_depth_puts_four_finest_cells_in_a_sample_spacing() {

@@ -388,7 +388,8 @@ def reach_for_the_arcs(
         ignored with a warning.
     screening_weight : float
         PoissonRecon's screening weight; rfta's solver needs 3 times the value for the same fit
-        (docs/spsr.md), so it runs with ``3 * screening_weight``.
+        (docs/spsr.md), so it runs with ``3 * screening_weight``, halved for each Poisson depth
+        beyond 9 as rfta's own screening is (fine grids: docs/faithfulness.md).
     rasterization_resolution : int, optional
         Cells per axis of the empty-space raster (default ``64 ceil(n^(1/3) / 16)``).
     max_points_per_sphere : int
