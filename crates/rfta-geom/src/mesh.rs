@@ -140,6 +140,20 @@ impl TriMesh {
         remove_unreferenced(&mut self.vertices, &mut self.faces)
     }
 
+    /// The faces named by `faces` (indices into [`TriMesh::faces`], kept in that order) as a mesh
+    /// of their own, with only the vertices they use, in their order here.
+    /// Costs what the part holds, not what the whole mesh does.
+    pub fn part(&self, faces: &[usize]) -> TriMesh {
+        let mut used: Vec<u32> = faces.iter().flat_map(|&f| self.faces[f]).collect();
+        used.sort_unstable();
+        used.dedup();
+        let renumber = |v: u32| used.binary_search(&v).map_or(u32::MAX, |i| i as u32);
+        TriMesh {
+            vertices: used.iter().map(|&v| self.vertices[v as usize]).collect(),
+            faces: faces.iter().map(|&f| self.faces[f].map(renumber)).collect(),
+        }
+    }
+
     /// Adds `other`'s vertices and faces (its faces renumbered after this mesh's vertices): the
     /// union of the two as one mesh with separate components.
     pub fn append(&mut self, other: &TriMesh) {
@@ -228,6 +242,31 @@ mod tests {
                 prop_assert_eq!(compact.triangle(f), mesh.triangle(f));
             }
             prop_assert!(compact.validate().is_ok());
+        }
+
+        /// Against brute force: a part is the chosen faces, in the order chosen, over exactly
+        /// the vertices they use, in the whole mesh's order.
+        #[test]
+        fn a_part_is_its_faces_over_their_own_vertices(
+            n in 1usize..40,
+            raw in proptest::collection::vec([0u32..1000, 0u32..1000, 0u32..1000], 1..30),
+            pick in proptest::collection::vec(0usize..1000, 0..20),
+        ) {
+            let vertices: Vec<DVec3> = (0..n).map(|i| DVec3::new(i as f64, 0.5, -1.0)).collect();
+            let faces: Vec<[u32; 3]> = raw.iter().map(|f| f.map(|v| v % n as u32)).collect();
+            let mesh = TriMesh::new(vertices.clone(), faces.clone()).expect("indices in range");
+            let chosen: Vec<usize> = pick.iter().map(|&f| f % faces.len()).collect();
+            let part = mesh.part(&chosen);
+            let used: Vec<DVec3> = (0..n)
+                .filter(|&i| chosen.iter().any(|&f| faces[f].contains(&(i as u32))))
+                .map(|i| vertices[i])
+                .collect();
+            prop_assert_eq!(&part.vertices, &used);
+            prop_assert_eq!(part.faces.len(), chosen.len());
+            for (k, &f) in chosen.iter().enumerate() {
+                prop_assert_eq!(part.triangle(k), mesh.triangle(f));
+            }
+            prop_assert!(part.validate().is_ok());
         }
     }
 

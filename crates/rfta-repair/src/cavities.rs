@@ -62,17 +62,10 @@ pub fn cavity_openings(mesh: &TriMesh, spheres: &Spheres<'_>, grid: &Grid) -> Op
     let parts: Vec<Option<(MeshIndex, rfta_geom::Aabb)>> = walls
         .iter()
         .map(|faces| {
-            let part = TriMesh {
-                vertices: mesh.vertices.clone(),
-                faces: faces.iter().map(|&f| mesh.faces[f]).collect(),
-            };
-            let bounds = rfta_geom::Aabb::from_points(
-                &faces
-                    .iter()
-                    .flat_map(|&f| mesh.triangle(f))
-                    .collect::<Vec<_>>(),
-            );
-            MeshIndex::new(&part).ok().map(|index| (index, bounds))
+            let part = mesh.part(faces);
+            MeshIndex::new(&part)
+                .ok()
+                .map(|index| (index, part.bounds()))
         })
         .collect();
     let centre = |i: usize| spheres.frame.to_mesh(spheres.spheres[i].center);

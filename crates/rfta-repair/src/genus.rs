@@ -84,11 +84,7 @@ fn nearest_faces_to_largest(mesh: &TriMesh) -> Vec<(u32, u32)> {
     if parts.len() < 2 {
         return Vec::new();
     }
-    let main = TriMesh {
-        vertices: mesh.vertices.clone(),
-        faces: parts[largest].iter().map(|&f| mesh.faces[f]).collect(),
-    };
-    let Ok(index) = rfta_mesh::MeshIndex::new(&main) else {
+    let Ok(index) = rfta_mesh::MeshIndex::new(&mesh.part(&parts[largest])) else {
         return Vec::new();
     };
     let centre = |f: u32| {

@@ -63,32 +63,18 @@ pub(crate) fn settle_components(
         return Ok((0, 0));
     };
     // The largest component alone: where the others lie against it.
-    let main = {
-        let faces: Vec<[u32; 3]> = components[largest].iter().map(|&f| mesh.faces[f]).collect();
-        let mut m = TriMesh {
-            vertices: mesh.vertices.clone(),
-            faces,
-        };
-        m.remove_unreferenced_vertices();
-        MeshIndex::new(&m)?
-    };
+    let main = MeshIndex::new(&mesh.part(&components[largest]))?;
     let mut questions = Vec::new();
     for (c, faces) in components.iter().enumerate() {
         if c == largest {
             continue;
         }
-        let mut vertices: Vec<u32> = faces.iter().flat_map(|&f| mesh.faces[f]).collect();
-        vertices.sort_unstable();
-        vertices.dedup();
-        let points: Vec<DVec3> = vertices
-            .iter()
-            .map(|&v| mesh.vertices[v as usize])
-            .collect();
-        let bounds = rfta_geom::Aabb::from_points(&points);
+        let part = mesh.part(faces);
+        let bounds = part.bounds();
         let diagonal = (bounds.max - bounds.min).length();
-        let void = rfta_mesh::signed_volume(mesh, faces) < 0.0;
-        if diagonal < small && !witnessed(mesh, faces, bounds, void, samples)? {
-            let centre = points.iter().sum::<DVec3>() / points.len() as f64;
+        let void = part.signed_volume() < 0.0;
+        if diagonal < small && !witnessed(&part, bounds, void, samples)? {
+            let centre = part.vertices.iter().sum::<DVec3>() / part.vertices.len() as f64;
             // A part must lie outside the main body, a void inside it.
             let nested = main.signed_distance(centre) < 0.0;
             // The wall between a void and the outside: halfway from the shell to the main
@@ -137,8 +123,7 @@ pub(crate) fn settle_components(
 /// void): the samples themselves support it, and removing it would put that sample on the wrong
 /// side.
 fn witnessed(
-    mesh: &TriMesh,
-    faces: &[usize],
+    part: &TriMesh,
     bounds: rfta_geom::Aabb,
     void: bool,
     samples: &SdfSamples,
@@ -151,11 +136,7 @@ fn witnessed(
     if inside.is_empty() {
         return Ok(false);
     }
-    let part = TriMesh {
-        vertices: mesh.vertices.clone(),
-        faces: faces.iter().map(|&f| mesh.faces[f]).collect(),
-    };
-    let index = MeshIndex::new(&part)?;
+    let index = MeshIndex::new(part)?;
     Ok(inside.iter().any(|&p| index.winding_number(p).abs() > 0.5))
 }
 
@@ -266,8 +247,8 @@ mod tests {
     #[test]
     fn a_handle_the_function_contradicts_is_cut_and_one_it_confirms_stays() {
         let torus = shapes::torus(1.0, 0.1, 64, 16);
-        // The function of a ball of radius 1.5: the tube's centre line is inside it... and the
-        // loop around the tube (length 0.63) has its centre on the tube's centre line.
+        // The torus's own signed distance: the loop around the tube (length 0.63, radius 0.1)
+        // has its centre on the tube's centre line, 0.1 deep.
         let mut confirmed = torus.clone();
         let mut tube = |p: &[DVec3]| -> Result<Vec<f64>> {
             Ok(p.iter()
