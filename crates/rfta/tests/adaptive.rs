@@ -124,11 +124,9 @@ fn the_report_counts_every_evaluation() {
         &AtomicBool::new(false),
     )
     .expect("adaptive");
+    // Every point the oracle saw, the final pass's questions included, is in the report.
     assert_eq!(out.report.evaluations, calls.load(Ordering::Relaxed));
     assert!(out.report.evaluations <= 1_500);
-    // The questions of the final pass (small components, thin handles) are counted too.
-    let r = &out.reconstruction.report.repair;
-    assert!(r.small_components_asked * 2 + r.thin_handles_asked <= out.report.evaluations);
 }
 
 /// A fixed way of answering, for the failure cases.
