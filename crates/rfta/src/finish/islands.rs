@@ -43,12 +43,10 @@ pub(super) fn inverted_and_unenclosed(
 }
 
 /// The verdict on one component (`faces` of `mesh`, in the samples' coordinates, within
-/// `bounds`); `tree` holds every sample sphere, built on first use; `main` indexes the largest
-/// component in the unit box.
+/// `bounds`); `main` indexes the largest component in the unit box.
 pub(super) fn judge(
     unit: &UnitBox,
     params: &Params,
-    tree: &OnceLock<SphereTree>,
     main: Option<&rfta_mesh::MeshIndex>,
     mesh: &TriMesh,
     faces: &[usize],
@@ -61,7 +59,10 @@ pub(super) fn judge(
     let mut vertices: Vec<u32> = faces.iter().flat_map(|&f| mesh.faces[f]).collect();
     vertices.sort_unstable();
     vertices.dedup();
-    let tree = tree.get_or_init(|| SphereTree::new(&unit.spheres));
+    // The spheres the tests below can meet: those that reach the component's box, or come
+    // within the gap margin of it (closes_gap).
+    let margin = consistency::GAP_MARGIN * unit.spacing();
+    let tree = SphereTree::with_indices(&unit.spheres, &unit.spheres_reaching(bounds, margin));
     let tol = params.tolerance;
     // A closed component stands for a solid (outward) or a cavity (inward): a sample inside it
     // of that sign witnesses it, however small it is. Computed at most once.
@@ -100,7 +101,7 @@ pub(super) fn judge(
     // gaps).
     if diag < params.min_island * h
         && !encloses_witness()
-        && !closes_gap(unit, tree, main, mesh, faces, &vertices)
+        && !closes_gap(unit, &tree, main, mesh, faces, &vertices)
     {
         return Some(Island::Small);
     }

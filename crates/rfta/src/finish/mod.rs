@@ -52,19 +52,14 @@ pub(crate) fn finish(
 ) -> Result<Finished> {
     progress(Stage::Final);
     let cloud = rounds.cloud;
-    // Every sample sphere's tree: the rounds' when they built one, else built on first use.
-    let tree = OnceLock::new();
-    if let Some(all) = rounds.all {
-        let _ = tree.set(all);
-    }
     let (mesh, mut final_solve) = final_solve(unit, params, &cloud, &[], journal)?;
-    let (mut mesh, mut repair) = repair(samples, unit, params, &tree, mesh, journal);
+    let (mut mesh, mut repair) = repair(samples, unit, params, mesh, journal);
     if !params.keep_cavities
         && repair.cavities > 0
         && let Some(grid) = samples.as_grid()
     {
         let t = Instant::now();
-        let opened = open_cavities(samples, grid, unit, params, &cloud, &tree, mesh, repair)?;
+        let opened = open_cavities(samples, grid, unit, params, &cloud, mesh, repair)?;
         (mesh, repair) = (opened.mesh, opened.repair);
         if let Some(side_errors) = opened.side_errors {
             final_solve.side_errors = side_errors;
@@ -134,7 +129,6 @@ fn open_cavities(
     unit: &UnitBox,
     params: &Params,
     cloud: &TangentPoints,
-    tree: &OnceLock<SphereTree>,
     mesh: TriMesh,
     repair_report: RepairReport,
 ) -> Result<Opened> {
@@ -162,7 +156,7 @@ fn open_cavities(
         // The re-solve's and the repair's own steps are timed together as one.
         let mut scratch = Journal::default();
         let (mesh, solve) = final_solve(unit, params, cloud, &extra, &mut scratch)?;
-        let (mesh, repair) = repair(samples, unit, params, tree, mesh, &mut scratch);
+        let (mesh, repair) = repair(samples, unit, params, mesh, &mut scratch);
         if repair.cavities >= best.repair.cavities {
             break;
         }
@@ -187,7 +181,6 @@ fn repair(
     samples: &SdfSamples,
     unit: &UnitBox,
     params: &Params,
-    tree: &OnceLock<SphereTree>,
     mut mesh: TriMesh,
     journal: &mut Journal,
 ) -> (TriMesh, RepairReport) {
@@ -207,7 +200,7 @@ fn repair(
                 };
                 rfta_mesh::MeshIndex::new(&part).ok()
             });
-            judge(unit, params, tree, main.as_ref(), &mesh, faces, bounds)
+            judge(unit, params, main.as_ref(), &mesh, faces, bounds)
         },
     );
     mesh = kept;

@@ -223,15 +223,7 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
         let main = rfta_mesh::MeshIndex::new(&main).expect("index");
         let faces: Vec<usize> = (0..m.faces.len()).collect();
         let bounds = Aabb::from_points(&m.vertices);
-        judge(
-            &unit,
-            &params,
-            &OnceLock::new(),
-            Some(&main),
-            m,
-            &faces,
-            bounds,
-        )
+        judge(&unit, &params, Some(&main), m, &faces, bounds)
     };
     assert_eq!(judge_on(&with_solid, &solid), None);
     // Without the small parts, the samples around them are large: inside their spheres.
