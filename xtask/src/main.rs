@@ -46,7 +46,7 @@ commands:
             [--2d: the 2D pipeline and marching squares on inputs2d, --res 16,32,64]
             [--vdb: each shape as an OpenVDB level set (voxel 2/N, --res 50,100), rfta against
             OpenVDB's volumeToMesh on it (needs Debian's python3-openvdb)]
-            [--samples N] [--depth D] [--owner-band K] [--rounds R] [--initial gradient|raster]
+            [--samples N] [--depth D] [--owner-band K] [--rounds R] [--seed S] [--initial gradient|raster]
             [--keep-cavities] [--quick] [--out DIR]: Table 2 with marching
             cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
             chamfer.svg, contact_sheet.png and .html); --depth and --owner-band override the rfta methods'

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo xtask eval [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper,rfta-genus]
-//!                  [--samples N] [--depth D] [--owner-band K] [--raster-resolution R] [--rounds R]
+//!                  [--samples N] [--depth D] [--owner-band K] [--raster-resolution R] [--rounds R] [--seed S]
 //!                  [--initial gradient|raster] [--keep-cavities] [--quick]
 //!                  [--out DIR]
 //! cargo xtask eval --scenario noise,clamp,scattered,swept,collision,params [--levels L,..] [--inputs DIR] [--quick]
@@ -143,7 +143,12 @@ fn parse(args: &[String]) -> Result<Args> {
                 }
             }
             "--samples" => a.samples = value()?.parse().context("--samples takes a number")?,
-            "--depth" | "--owner-band" | "--raster-resolution" | "--raster-res" | "--rounds" => {
+            "--depth"
+            | "--owner-band"
+            | "--raster-resolution"
+            | "--raster-res"
+            | "--rounds"
+            | "--seed" => {
                 let name = match flag.as_str() {
                     "--raster-res" => "raster_resolution".to_string(),
                     flag => flag.trim_start_matches('-').replace('-', "_"),
