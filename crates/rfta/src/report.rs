@@ -192,8 +192,11 @@ pub struct InitialReport {
 /// What the screened Poisson solves and fine-tuning rounds did (steps 4 and 5).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct RoundsReport {
-    /// Octree depth of the screened Poisson solves.
+    /// Octree depth of the final screened Poisson solve.
     pub spsr_depth: u32,
+    /// Octree depth of the solves inside the rounds: the final one's, or one less on fine grids
+    /// ([`crate::ROUND_FULL_DEPTH`]).
+    pub round_spsr_depth: u32,
     /// Tangency points before each fine-tuning round and at the end (`rounds + 1` entries unless
     /// stopped early).
     pub points_per_round: Vec<usize>,
@@ -383,9 +386,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 5 + 3 + 3 + 13 fields, the mesh check's 6, the consistency check's 6
+        // The stages' 4 + 5 + 4 + 3 + 13 fields, the mesh check's 6, the consistency check's 6
         // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 5 + 3 + 3 + 13 + 6 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 5 + 4 + 3 + 13 + 6 + 6 + 2, "{text}");
     }
 
     #[test]

@@ -20,9 +20,11 @@ pub(crate) struct Rounds {
     /// The screened Poisson setting of the solves inside the rounds.
     pub(crate) spsr: SpsrParams,
     feasible: rfta_feasible::Params,
-    /// The tree of every sphere, when every round tests against all of them (no batching); the
-    /// final stage reuses it.
-    pub(crate) all: Option<SphereTree>,
+    /// The tree of every sphere, when every round tests against all of them (no batching).
+    all: Option<SphereTree>,
+    /// The spheres the batches are drawn from: every sphere, or on fine grids the drawn ones
+    /// ([`Rounds::batch_pool`]).
+    pool: Option<Vec<u32>>,
 }
 
 impl Rounds {
@@ -36,6 +38,7 @@ impl Rounds {
                 unit.owner_scale(),
             ),
             all: None,
+            pool: None,
         }
     }
 
@@ -52,12 +55,15 @@ impl Rounds {
     ) -> crate::Result<RoundsReport> {
         let n = unit.len();
         let mut report = RoundsReport {
-            spsr_depth: self.spsr.depth,
+            spsr_depth: params.spsr_params(Some(unit.spacing())).depth,
+            round_spsr_depth: self.spsr.depth,
             ..RoundsReport::default()
         };
         // Without batching every round tests against the same tree: built once.
         if params.rounds > 0 && params.batch_holds_all(n) {
             self.all = Some(SphereTree::new(&unit.spheres));
+        } else if params.fine_rounds(Some(unit.spacing())) {
+            self.pool = Some(Self::batch_pool(unit, params));
         }
         for round in 1..=params.rounds {
             go_on()?;
@@ -72,11 +78,22 @@ impl Rounds {
             let tree = match &self.all {
                 Some(t) => t,
                 None => {
-                    batch = SphereTree::batch(
-                        &unit.spheres,
-                        params.batch_size,
-                        Seeds(params.seed).round_batch(round),
-                    );
+                    let seed = Seeds(params.seed).round_batch(round);
+                    batch = match &self.pool {
+                        None => SphereTree::batch(&unit.spheres, params.batch_size, seed),
+                        Some(pool) => SphereTree::with_indices(
+                            &unit.spheres,
+                            &rfta_geom::rng::batch_with_replacement(
+                                pool.len(),
+                                params.batch_size,
+                                seed,
+                            )
+                            .map_or_else(
+                                || pool.clone(),
+                                |at| at.iter().map(|&k| pool[k as usize]).collect(),
+                            ),
+                        ),
+                    };
                     &batch
                 }
             };
@@ -124,6 +141,18 @@ impl Rounds {
         // The points the final solve takes.
         report.points_per_round.push(self.cloud.len());
         Ok(report)
+    }
+
+    /// On fine grids ([`Params::fine_rounds`]) a round's feasibility batch is drawn
+    /// from the spheres the initial points draw ([`UnitBox::raster_radius`]) instead of from
+    /// every sphere: of the 2.1 million of a 129^3 grid 92% are farther out, so a batch of all
+    /// held about 260 spheres that can meet a tangency point, and the large ones it held instead
+    /// made every query visit most of the tree.
+    fn batch_pool(unit: &UnitBox, params: &Params) -> Vec<u32> {
+        let reach = unit.raster_radius(params);
+        (0..unit.len() as u32)
+            .filter(|&i| unit.spheres[i as usize].radius < reach)
+            .collect()
     }
 }
 
