@@ -61,7 +61,7 @@ use run::{Keep, run};
 pub use rfta_geom::{OrientedPoints, TriMesh, glam};
 pub use sides::{
     SIDE_MARGIN, SIDE_PASSES, SIDE_RECHECK, SIDE_RESOLVE_SWEEPS, SIDE_TARGET, SIDE_WEIGHT,
-    SIDE_WEIGHT_GROWTH, SidePoint,
+    SIDE_WEIGHT_GROWTH, SidePoint, SideSet,
 };
 pub use workspace::Workspace;
 
@@ -247,7 +247,7 @@ pub struct Reconstruction {
 /// solution has no level set.
 pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
     params.validate()?;
-    Ok(run(points, params, &[], None, Keep::Nothing)?.0)
+    Ok(run(points, params, crate::sides::NO_SIDES, None, Keep::Nothing)?.0)
 }
 
 /// [`reconstruct`], with points known to lie inside or outside the surface.
@@ -301,7 +301,7 @@ pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Recon
 /// As [`reconstruct`].
 pub fn reconstruct_with_sides(
     points: &OrientedPoints,
-    sides: &[SidePoint],
+    sides: &dyn SideSet,
     params: &SpsrParams,
 ) -> Result<Reconstruction> {
     params.validate()?;

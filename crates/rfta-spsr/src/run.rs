@@ -6,10 +6,10 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::sides::{SIDE_PASSES, SIDE_RESOLVE_SWEEPS, Sides};
+use crate::sides::{SIDE_PASSES, SIDE_RESOLVE_SWEEPS, SideSet, Sides};
 use crate::{
-    Error, OrientedPoints, Reconstruction, Result, SidePoint, SpsrParams, SpsrReport, TriMesh,
-    extract, glam, solve, tree,
+    Error, OrientedPoints, Reconstruction, Result, SpsrParams, SpsrReport, TriMesh, extract, glam,
+    solve, tree,
 };
 
 /// What a solve keeps for the next one.
@@ -25,7 +25,7 @@ pub(crate) enum Keep {
 pub(crate) fn run(
     points: &OrientedPoints,
     params: &SpsrParams,
-    sides: &[SidePoint],
+    sides: &dyn SideSet,
     warm: Option<&solve::WarmStart>,
     keep: Keep,
 ) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
@@ -113,7 +113,7 @@ struct Solved {
 fn solve_with_sides(
     octree: &mut Octree,
     params: &SpsrParams,
-    sides: &[SidePoint],
+    sides: &dyn SideSet,
     warm: Option<&solve::WarmStart>,
 ) -> Solved {
     let t = Instant::now();

@@ -16,6 +16,49 @@ pub struct SidePoint {
     pub inside: bool,
 }
 
+/// Side points as [`crate::reconstruct_with_sides`] reads them: by index, so that a caller with
+/// millions of them (every sample of a 257^3 grid) need not gather them into a list first.
+pub trait SideSet: Sync {
+    /// How many indices there are.
+    fn len(&self) -> usize;
+    /// The side point at index `i < len()`; `None` when that index holds none.
+    fn get(&self, i: usize) -> Option<SidePoint>;
+    /// Whether there are no indices.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl SideSet for [SidePoint] {
+    fn len(&self) -> usize {
+        <[SidePoint]>::len(self)
+    }
+    fn get(&self, i: usize) -> Option<SidePoint> {
+        <[SidePoint]>::get(self, i).copied()
+    }
+}
+
+impl SideSet for Vec<SidePoint> {
+    fn len(&self) -> usize {
+        self.as_slice().len()
+    }
+    fn get(&self, i: usize) -> Option<SidePoint> {
+        self.as_slice().get(i).copied()
+    }
+}
+
+impl<const N: usize> SideSet for [SidePoint; N] {
+    fn len(&self) -> usize {
+        N
+    }
+    fn get(&self, i: usize) -> Option<SidePoint> {
+        self.as_slice().get(i).copied()
+    }
+}
+
+/// No side points: the plain solve's.
+pub(crate) const NO_SIDES: &[SidePoint; 0] = &[];
+
 /// Re-solves after the first at most, in [`crate::reconstruct_with_sides`].
 pub const SIDE_PASSES: usize = 4;
 
@@ -54,38 +97,44 @@ pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
 /// the 129^3 bunny 29% shorter.
 pub const SIDE_RESOLVE_SWEEPS: usize = 2;
 
-/// The side points in the reconstruction cube and the screening terms of those found wrong.
-pub(crate) struct Sides {
-    /// In the unit cube, with whether each is inside.
-    points: Vec<(DVec3, bool)>,
+/// The side points in the reconstruction cube and the screening terms of those found wrong. The
+/// points stay the caller's (a 257^3 grid has 17 million): each is moved into the cube when it is
+/// looked at, and only those found wrong keep state here.
+pub(crate) struct Sides<'a> {
+    /// The caller's side points, in the points' coordinates.
+    points: &'a (dyn SideSet + 'a),
+    frame: &'a tree::Frame,
     constraints: Vec<ValueConstraint>,
-    /// Per side point, its constraint's index once it has one.
-    active: Vec<Option<u32>>,
+    /// Side point to its constraint's index, once it has one.
+    active: std::collections::HashMap<usize, u32>,
     /// Side points on the wrong side after each pass.
     errors: Vec<usize>,
     /// The side points the re-solves between the first and the last look at again.
     recheck: Option<Vec<usize>>,
 }
 
-impl Sides {
-    /// The side points inside the cube of `frame` (the others are ignored).
-    pub(crate) fn in_cube(sides: &[SidePoint], frame: &tree::Frame) -> Self {
-        let points: Vec<(DVec3, bool)> = sides
-            .iter()
-            .map(|s| (frame.to_unit(s.position), s.inside))
-            .filter(|(u, _)| u.cmpge(DVec3::ZERO).all() && u.cmplt(DVec3::ONE).all())
-            .collect();
+impl<'a> Sides<'a> {
+    /// The side points; those outside the cube of `frame` are ignored.
+    pub(crate) fn in_cube(points: &'a (dyn SideSet + 'a), frame: &'a tree::Frame) -> Self {
         Self {
-            active: vec![None; points.len()],
             points,
+            frame,
             constraints: Vec::new(),
+            active: std::collections::HashMap::new(),
             errors: Vec::new(),
             recheck: None,
         }
     }
 
+    /// Side point `i` in the unit cube, with whether it is inside; `None` outside the cube.
+    fn point(&self, i: usize) -> Option<(DVec3, bool)> {
+        let s = self.points.get(i)?;
+        let u = self.frame.to_unit(s.position);
+        (u.cmpge(DVec3::ZERO).all() && u.cmplt(DVec3::ONE).all()).then_some((u, s.inside))
+    }
+
     pub(crate) fn is_empty(&self) -> bool {
-        self.points.is_empty()
+        !(0..self.points.len()).any(|i| self.point(i).is_some())
     }
 
     /// The screening terms so far.
@@ -112,35 +161,44 @@ impl Sides {
         iso: f64,
         last: bool,
     ) -> Vec<usize> {
-        let points = &self.points;
-        // How far each side point is on its side beyond the margin (negative: wrong).
+        // How far each side point in the cube is on its side beyond the margin (negative:
+        // wrong); `None` outside the cube.
         let slack = |i: usize| {
-            let (p, inside) = points[i];
+            let (p, inside) = self.point(i)?;
             let f = at(p);
-            if inside {
+            Some(if inside {
                 f - iso - SIDE_MARGIN
             } else {
                 iso - SIDE_MARGIN - f
-            }
+            })
         };
-        let n = points.len();
-        let every = || -> Vec<f64> { (0..n).into_par_iter().map(slack).collect() };
+        let n = self.points.len();
+        let below = |limit: f64| -> Vec<usize> {
+            (0..n)
+                .into_par_iter()
+                .filter(|&i| slack(i).is_some_and(|s| s < limit))
+                .collect()
+        };
         let wrong: Vec<usize> = match &self.recheck {
             None => {
-                let all = every();
-                self.recheck = Some((0..n).filter(|&i| all[i] < SIDE_RECHECK).collect());
-                (0..n).filter(|&i| all[i] < 0.0).collect()
+                let near = below(SIDE_RECHECK);
+                let wrong = near
+                    .iter()
+                    .copied()
+                    .filter(|&i| slack(i).is_some_and(|s| s < 0.0))
+                    .collect();
+                self.recheck = Some(near);
+                wrong
             }
             Some(near) => {
                 let w: Vec<usize> = near
                     .par_iter()
                     .copied()
-                    .filter(|&i| slack(i) < 0.0)
+                    .filter(|&i| slack(i).is_some_and(|s| s < 0.0))
                     .collect();
                 if last || w.is_empty() {
                     // The surface returned: its count over every side point.
-                    let all = every();
-                    (0..n).filter(|&i| all[i] < 0.0).collect()
+                    below(0.0)
                 } else {
                     w
                 }
@@ -160,7 +218,7 @@ impl Sides {
     ) -> Vec<DVec3> {
         wrong
             .iter()
-            .map(|&i| self.points[i].0)
+            .filter_map(|&i| self.point(i).map(|(p, _)| p))
             .filter(|&p| {
                 let c = tree::cell_of(p, depth);
                 finest
@@ -175,11 +233,13 @@ impl Sides {
     /// of those that have one multiplied by [`SIDE_WEIGHT_GROWTH`].
     pub(crate) fn constrain(&mut self, wrong: &[usize], iso: f64, total_w: f64, n: usize) {
         for &i in wrong {
-            match self.active[i] {
-                Some(c) => self.constraints[c as usize].weight *= SIDE_WEIGHT_GROWTH,
+            match self.active.get(&i) {
+                Some(&c) => self.constraints[c as usize].weight *= SIDE_WEIGHT_GROWTH,
                 None => {
-                    self.active[i] = Some(self.constraints.len() as u32);
-                    let (pos, inside) = self.points[i];
+                    let Some((pos, inside)) = self.point(i) else {
+                        continue;
+                    };
+                    self.active.insert(i, self.constraints.len() as u32);
                     self.constraints.push(ValueConstraint {
                         pos,
                         target: if inside {

@@ -62,7 +62,13 @@ impl Workspace {
         params: &SpsrParams,
     ) -> Result<Reconstruction> {
         params.validate()?;
-        let (out, warm) = run(points, params, &[], self.last.as_ref(), Keep::Coefficients)?;
+        let (out, warm) = run(
+            points,
+            params,
+            crate::sides::NO_SIDES,
+            self.last.as_ref(),
+            Keep::Coefficients,
+        )?;
         self.last = warm;
         Ok(out)
     }

@@ -146,12 +146,11 @@ pub(crate) fn measure_with(
 ) -> Result<Consistency> {
     let h = samples.spacing();
     let clamp = clamp.unwrap_or(f64::INFINITY);
-    let positions = samples.positions();
     let values = samples.values();
     if mesh.faces.is_empty() {
         // No surface: every negative sample is on the wrong side, every unclamped one has a gap.
         return Ok(Consistency {
-            samples: positions.len(),
+            samples: samples.len(),
             spacing: h,
             sign_errors: values.iter().filter(|&&s| s < -SIGN_MARGIN * h).count(),
             entered: 0,
@@ -175,10 +174,10 @@ pub(crate) fn measure_with(
     };
     let found = match on_grid {
         Some(grid) => check.grid(grid, values),
-        None => check.each(&positions, values),
+        None => check.each(&samples.positions(), values),
     };
     Ok(Consistency {
-        samples: positions.len(),
+        samples: samples.len(),
         spacing: h,
         sign_errors: found.sign_errors,
         entered: found.entered,
@@ -327,10 +326,29 @@ impl Check<'_> {
     /// segment between them are on the same side. The side is computed once per group of samples
     /// so joined (the far samples form a few large groups), by the union of those segments.
     fn grid(&self, grid: &Grid, values: &[f64]) -> Counts {
-        let distances: Vec<Distance> = (0..grid.len())
-            .into_par_iter()
-            .map(|i| self.distance(grid.position(i), values[i]))
-            .collect();
+        // The distance part of the counts, and each sample's empty radius for the groups (8
+        // bytes a sample: a 257^3 grid has 17 million).
+        const CHUNK: usize = 1024;
+        let mut empty = vec![0.0; grid.len()];
+        let distances = empty
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut counts = Counts::default();
+                for (k, e) in chunk.iter_mut().enumerate() {
+                    let i = c * CHUNK + k;
+                    let d = self.distance(grid.position(i), values[i]);
+                    *e = d.empty;
+                    counts = counts.add(Counts {
+                        sign_errors: 0,
+                        entered: usize::from(d.entered),
+                        gaps: usize::from(d.gap),
+                        deepest_entry: d.entry,
+                    });
+                }
+                counts
+            })
+            .reduce(Counts::default, Counts::add);
         let mut groups = UnionFind::new(grid.len());
         let [nx, ny, nz] = grid.dims();
         let step = grid.spacing();
@@ -339,7 +357,7 @@ impl Check<'_> {
                 for k in 0..nz {
                     let a = grid.index(i, j, k);
                     let mut join = |b: usize, gap: f64| {
-                        if distances[a].empty + distances[b].empty > gap {
+                        if empty[a] + empty[b] > gap {
                             groups.union(a, b);
                         }
                     };
@@ -362,21 +380,16 @@ impl Check<'_> {
             .into_par_iter()
             .map(|i| roots[i] == i && self.index.winding_number(grid.position(i)) > 0.5)
             .collect();
-        (0..grid.len())
+        let sign_errors = (0..grid.len())
             .into_par_iter()
-            .map(|i| {
-                let d = &distances[i];
-                Counts {
-                    sign_errors: usize::from(
-                        values[i].abs() > SIGN_MARGIN * self.h
-                            && inside[roots[i]] != (values[i] < 0.0),
-                    ),
-                    entered: usize::from(d.entered),
-                    gaps: usize::from(d.gap),
-                    deepest_entry: d.entry,
-                }
+            .filter(|&i| {
+                values[i].abs() > SIGN_MARGIN * self.h && inside[roots[i]] != (values[i] < 0.0)
             })
-            .reduce(Counts::default, Counts::add)
+            .count();
+        Counts {
+            sign_errors,
+            ..distances
+        }
     }
 }
 

@@ -102,7 +102,7 @@ fn drawing(
                 points
             }
             None => {
-                let c: Vec<DVec3> = draw.iter().map(|&i| unit.centers[i]).collect();
+                let c: Vec<DVec3> = draw.iter().map(|&i| unit.spheres[i].center).collect();
                 let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
                 let raster = params.raster_params(res, negative);
                 let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;

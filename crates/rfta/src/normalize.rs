@@ -5,14 +5,36 @@ use rfta_geom::{Grid, SdfSamples, Sphere};
 
 use crate::{Params, RASTER_REACH};
 
+/// The side points of the final solve ([`UnitBox::sides`]): index `i` below the sample count is
+/// sample `i` when its value is beyond the margin, the rest are the extra points.
+pub(crate) struct SampleSides<'a> {
+    unit: &'a UnitBox,
+    margin: f64,
+    extra: &'a [rfta_spsr::SidePoint],
+}
+
+impl rfta_spsr::SideSet for SampleSides<'_> {
+    fn len(&self) -> usize {
+        self.unit.len() + self.extra.len()
+    }
+
+    fn get(&self, i: usize) -> Option<rfta_spsr::SidePoint> {
+        let Some(&v) = self.unit.values.get(i) else {
+            return self.extra.get(i - self.unit.len()).copied();
+        };
+        (v.abs() > self.margin).then(|| rfta_spsr::SidePoint {
+            position: self.unit.spheres[i].center,
+            inside: v < 0.0,
+        })
+    }
+}
+
 /// The samples moved into the unit box as the reference does (subtract the per-axis minimum,
 /// divide by the largest extent), as spheres of radius `|s|` (times the noise shrink
 /// [`crate::InputReport::radius_scale`]) capped at the clamp.
 pub(crate) struct UnitBox {
     trans: DVec3,
     scale: f64,
-    /// Sphere centres (the sample positions).
-    pub(crate) centers: Vec<DVec3>,
     /// Signed values, scaled.
     pub(crate) values: Vec<f64>,
     /// Spheres of radius `radius_scale |s|`, or the clamp for clamped samples (`|s| >= clamp`).
@@ -29,26 +51,25 @@ pub(crate) struct UnitBox {
 
 impl UnitBox {
     pub(crate) fn new(samples: &SdfSamples, clamp: Option<f64>, radius_scale: Option<f64>) -> Self {
-        let positions = samples.positions();
-        let lo = positions
-            .iter()
-            .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
-        let hi = positions
-            .iter()
-            .fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
+        let n = samples.len();
+        let (lo, hi) = (0..n).fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), i| {
+                let p = samples.position(i);
+                (lo.min(p), hi.max(p))
+            },
+        );
         let extent = (hi - lo).max_element();
         let (trans, scale) = (lo, if extent > 0.0 { extent } else { 1.0 });
-        let centers: Vec<DVec3> = positions.iter().map(|&p| (p - trans) / scale).collect();
         let values: Vec<f64> = samples.values().iter().map(|&s| s / scale).collect();
         let cap = clamp.map_or(f64::INFINITY, |c| c / scale);
         let shrink = radius_scale.unwrap_or(1.0);
         // A clamped sample keeps the clamp as its radius (it owns no point); the others shrink.
-        let spheres = centers
-            .iter()
-            .zip(&values)
-            .map(|(&c, &s)| {
+        let spheres = (0..n)
+            .map(|i| {
+                let s = values[i];
                 Sphere::new(
-                    c,
+                    (samples.position(i) - trans) / scale,
                     if s.abs() >= cap {
                         cap
                     } else {
@@ -60,7 +81,6 @@ impl UnitBox {
         Self {
             trans,
             scale,
-            centers,
             values,
             spheres,
             clamp: cap,
@@ -112,18 +132,14 @@ impl UnitBox {
     }
 
     /// Every sample far enough from the surface to have a reliable side
-    /// ([`crate::consistency::SIGN_MARGIN`]), as a point the surface must leave on that side.
-    pub(crate) fn sides(&self) -> Vec<rfta_spsr::SidePoint> {
-        let margin = crate::consistency::SIGN_MARGIN * self.spacing();
-        self.spheres
-            .iter()
-            .zip(&self.values)
-            .filter(|(_, v)| v.abs() > margin)
-            .map(|(s, v)| rfta_spsr::SidePoint {
-                position: s.center,
-                inside: *v < 0.0,
-            })
-            .collect()
+    /// ([`crate::consistency::SIGN_MARGIN`]), as a point the surface must leave on that side,
+    /// then `extra`: read off the spheres as the solve asks (no list of millions).
+    pub(crate) fn sides<'a>(&'a self, extra: &'a [rfta_spsr::SidePoint]) -> SampleSides<'a> {
+        SampleSides {
+            unit: self,
+            margin: crate::consistency::SIGN_MARGIN * self.spacing(),
+            extra,
+        }
     }
 
     /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
@@ -177,7 +193,7 @@ impl UnitBox {
                     grad[a] = (v(hi) - v(lo)) / ((hi[a] - lo[a]) as f64 * h[a]);
                 }
                 let len = grad.length();
-                (len > 1e-12).then(|| self.centers[i] - self.values[i] * grad / len)
+                (len > 1e-12).then(|| self.spheres[i].center - self.values[i] * grad / len)
             })
             .collect();
         Some(points)
@@ -217,7 +233,7 @@ impl UnitBox {
         let lo = self.to_unit(bounds.min);
         let hi = self.to_unit(bounds.max);
         let inside = |i: &usize| {
-            let c = self.centers[*i];
+            let c = self.spheres[*i].center;
             c.cmpge(lo).all() && c.cmple(hi).all()
         };
         let Some(g) = &self.grid else {
@@ -330,7 +346,7 @@ mod tests {
             ]);
             let scan: Vec<usize> = (0..samples.len())
                 .filter(|&i| {
-                    let c = unit.centers[i];
+                    let c = unit.spheres[i].center;
                     c.cmpge(unit.to_unit(bounds.min)).all()
                         && c.cmple(unit.to_unit(bounds.max)).all()
                 })

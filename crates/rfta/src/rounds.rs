@@ -6,7 +6,7 @@ use std::time::Instant;
 use rfta_feasible::TangentPoints;
 use rfta_geom::OrientedPoints;
 use rfta_sphere_tree::SphereTree;
-use rfta_spsr::{SidePoint, SpsrParams};
+use rfta_spsr::{SidePoint, SideSet, SpsrParams};
 
 use crate::normalize::UnitBox;
 use crate::params::Seeds;
@@ -99,7 +99,7 @@ impl Rounds {
             };
             // A round's surface only guides the next moves: no side constraints (measured in
             // docs/faithfulness.md).
-            let mesh = match solve(&self.cloud, &[], &self.spsr) {
+            let mesh = match solve(&self.cloud, &[] as &[SidePoint; 0], &self.spsr) {
                 Ok(r) => r.mesh,
                 Err(e) => {
                     report.stopped_early = Some(format!("round {round}: {e}"));
@@ -160,7 +160,7 @@ impl Rounds {
 /// `sides` on the wrong side ([`rfta_spsr::reconstruct_with_sides`]; none: one solve).
 pub(crate) fn solve(
     cloud: &TangentPoints,
-    sides: &[SidePoint],
+    sides: &dyn SideSet,
     spsr: &SpsrParams,
 ) -> std::result::Result<rfta_spsr::Reconstruction, rfta_spsr::Error> {
     let pts = OrientedPoints::new(cloud.points.clone(), cloud.normals.clone(), None)

@@ -70,7 +70,7 @@ pub(super) fn judge(
     let mut encloses_witness = || {
         *witnessed.get_or_insert_with(|| {
             unit.samples_within(bounds).into_iter().any(|i| {
-                let p = unit.to_input(unit.centers[i]);
+                let p = unit.to_input(unit.spheres[i].center);
                 let w: f64 = faces
                     .iter()
                     .map(|&f| {
@@ -149,7 +149,10 @@ pub(super) fn closes_gap(
         .map(|&f| mesh.triangle(f).map(|v| unit.to_unit(v)))
         .collect();
     let witnesses = reached.iter().filter(|&&i| {
-        let (c, r) = (unit.centers[i as usize], unit.values[i as usize].abs());
+        let (c, r) = (
+            unit.spheres[i as usize].center,
+            unit.values[i as usize].abs(),
+        );
         let d = triangles
             .iter()
             .map(|[a, b, t]| {

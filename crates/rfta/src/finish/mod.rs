@@ -92,8 +92,7 @@ fn final_solve(
     let mut report = FinalSolveReport::default();
     crate::pool::waiters_back();
     let t = Instant::now();
-    let mut sides = unit.sides();
-    sides.extend_from_slice(extra);
+    let sides = unit.sides(extra);
     let solved = crate::rounds::solve(cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
     report.side_errors = solved.report.side_errors;
     let mut mesh = solved.mesh;
