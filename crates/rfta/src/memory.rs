@@ -4,20 +4,23 @@
 use crate::{Error, Params, Result};
 
 /// An upper estimate of the peak resident memory, in bytes, of reconstructing from `n` samples
-/// (the samples included): a fixed 256 MiB (the depth-10 screened Poisson octree, thread stacks,
-/// the binary) plus 1 KiB per sample (positions, spheres, sphere tree, k-d trees, tangency points
-/// and their octree cells, the empty-space samples of a raster that grows with `n^(1/3)`), plus
-/// 200 B per sample for each tangency point allowed beyond 3 per sphere.
+/// (the samples included): a fixed 128 MiB (thread stacks, the binary, the coarse solves), 72 B per
+/// sample (the input's value, the unit box's sphere and value, the check's empty radius and group
+/// per sample), 32 KiB per `n^(2/3)` (what follows the surface, whose area grows as `n^(2/3)` on a
+/// grid: tangency points, the octree, the meshes and their indices), plus 200 B per sample for
+/// each tangency point allowed beyond 3 per sphere.
 ///
-/// Checked against `/usr/bin/time -v` peaks of `rfta reconstruct` on the bunny's SDF at 33^3, 65^3
-/// and 129^3 samples (185, 444 and 1409 MiB; the estimate is 1.6, 1.2 and 1.7 times these; see
-/// docs/hardening.md).
+/// Checked against the peaks of `rfta reconstruct` on the bunny's SDF (docs/hardening.md, "Memory":
+/// 90, 233, 604, 2,638 and 10,927 MiB at 33^3, 65^3, 129^3, 257^3 and 513^3 samples; the estimate
+/// is 1.2 to 1.8 times these).
 pub fn estimate_peak_memory(n: usize, params: &Params) -> u64 {
-    const BASE: u64 = 256 << 20;
-    const PER_SAMPLE: u64 = 1024;
+    const BASE: u64 = 128 << 20;
+    const PER_SAMPLE: u64 = 72;
+    const PER_SURFACE_CELL: f64 = 32.0 * 1024.0;
     const PER_EXTRA_POINT: u64 = 200;
     let extra_points = params.max_points_per_sphere.saturating_sub(3) as u64;
-    BASE.saturating_add(
+    let surface = (PER_SURFACE_CELL * rfta_geom::math::cbrt(n as f64).powi(2)) as u64;
+    BASE.saturating_add(surface).saturating_add(
         (n as u64).saturating_mul(PER_SAMPLE.saturating_add(extra_points * PER_EXTRA_POINT)),
     )
 }

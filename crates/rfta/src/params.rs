@@ -221,12 +221,13 @@ pub fn screening_at(screening: f64, depth: u32) -> f64 {
 /// coarser ([`Params::round_spsr_params`]) and draw their batches from the spheres near the
 /// surface (those the initial points draw: [`RASTER_REACH`] owner radii).
 ///
-/// A round's surface only says where each sphere's points move next, by at most `tau`. Measured
-/// on the dev shapes (docs/speed.md): at depth 11 (N = 100) the rounds one depth coarser give the
-/// same mean Chamfer (0.000911 both), fewer thin loops (12 to 2) and no entered sphere (3 before),
-/// for less than half the solve time; the 129^3 bunny 30.5 to 22 s of wall time at Chamfer
-/// 0.000462 to 0.000468. At depth 10 (N = 50) it cost accuracy (0.002894 to 0.002903) and doubled
-/// the thin loops (4 to 8), so the rounds there keep the final depth.
+/// A round's surface only says where each sphere's points move next, by at most `tau`; and on a
+/// 129^3 grid 92% of the spheres lie beyond the near ones, so a batch of every sphere held about
+/// 260 that can meet a tangency point. Measured (docs/speed.md, item 33): at depth 11 (N = 100)
+/// the dev shapes' mean Chamfer 0.000911 to 0.000904, thin loops 12 to 6; the 129^3 bunny 30.5
+/// to 17.5 s of wall time at Chamfer 0.000462 to 0.000463. At depth 10 (N = 50) the coarser
+/// rounds cost accuracy (0.002894 to 0.002903) and the near batches were within the seeds' noise
+/// at N = 30, so up to depth 10 the rounds stay the reference's.
 pub const ROUND_FULL_DEPTH: u32 = 10;
 
 /// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
