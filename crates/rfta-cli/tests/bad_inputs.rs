@@ -303,7 +303,7 @@ fn an_input_larger_than_memory_is_refused_from_its_header() {
     assert_eq!(code, 1, "{err}");
     assert!(
         err.contains("oversized_513.npy: refused before reading (the limit is --max-memory)")
-            && err.contains("135005697 samples need about 129.0 GiB of memory")
+            && err.contains("135005697 samples need about 17.2 GiB of memory")
             && err.contains("more than the limit of 8.0 GiB"),
         "{err}"
     );
