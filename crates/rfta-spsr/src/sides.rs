@@ -29,7 +29,7 @@ pub trait SideSet: Sync {
     }
 }
 
-impl SideSet for [SidePoint] {
+impl SideSet for &[SidePoint] {
     fn len(&self) -> usize {
         <[SidePoint]>::len(self)
     }
@@ -104,6 +104,8 @@ pub(crate) struct Sides<'a> {
     /// The caller's side points, in the points' coordinates.
     points: &'a (dyn SideSet + 'a),
     frame: &'a tree::Frame,
+    /// Whether any side point lies in the cube.
+    any: bool,
     constraints: Vec<ValueConstraint>,
     /// Side point to its constraint's index, once it has one.
     active: std::collections::HashMap<usize, u32>,
@@ -116,14 +118,17 @@ pub(crate) struct Sides<'a> {
 impl<'a> Sides<'a> {
     /// The side points; those outside the cube of `frame` are ignored.
     pub(crate) fn in_cube(points: &'a (dyn SideSet + 'a), frame: &'a tree::Frame) -> Self {
-        Self {
+        let mut sides = Self {
             points,
             frame,
+            any: false,
             constraints: Vec::new(),
             active: std::collections::HashMap::new(),
             errors: Vec::new(),
             recheck: None,
-        }
+        };
+        sides.any = (0..points.len()).any(|i| sides.point(i).is_some());
+        sides
     }
 
     /// Side point `i` in the unit cube, with whether it is inside; `None` outside the cube.
@@ -134,7 +139,7 @@ impl<'a> Sides<'a> {
     }
 
     pub(crate) fn is_empty(&self) -> bool {
-        !(0..self.points.len()).any(|i| self.point(i).is_some())
+        !self.any
     }
 
     /// The screening terms so far.
@@ -173,21 +178,18 @@ impl<'a> Sides<'a> {
             })
         };
         let n = self.points.len();
-        let below = |limit: f64| -> Vec<usize> {
+        // The side points less than `limit` on their side, with how far.
+        let below = |limit: f64| -> Vec<(usize, f64)> {
             (0..n)
                 .into_par_iter()
-                .filter(|&i| slack(i).is_some_and(|s| s < limit))
+                .filter_map(|i| slack(i).filter(|&s| s < limit).map(|s| (i, s)))
                 .collect()
         };
         let wrong: Vec<usize> = match &self.recheck {
             None => {
                 let near = below(SIDE_RECHECK);
-                let wrong = near
-                    .iter()
-                    .copied()
-                    .filter(|&i| slack(i).is_some_and(|s| s < 0.0))
-                    .collect();
-                self.recheck = Some(near);
+                let wrong = near.iter().filter(|p| p.1 < 0.0).map(|p| p.0).collect();
+                self.recheck = Some(near.into_iter().map(|p| p.0).collect());
                 wrong
             }
             Some(near) => {
@@ -198,7 +200,7 @@ impl<'a> Sides<'a> {
                     .collect();
                 if last || w.is_empty() {
                     // The surface returned: its count over every side point.
-                    below(0.0)
+                    below(0.0).into_iter().map(|p| p.0).collect()
                 } else {
                     w
                 }

@@ -162,7 +162,7 @@ fn drawing(
 }
 
 /// `b` indices drawn with replacement from `set` (all of it when `b` is 0 or at least its size).
-fn draw_batch(set: &[u32], b: usize, seed: u64) -> Vec<u32> {
+pub(crate) fn draw_batch(set: &[u32], b: usize, seed: u64) -> Vec<u32> {
     match rfta_geom::rng::batch_with_replacement(set.len(), b, seed) {
         Some(at) => at.iter().map(|&k| set[k as usize]).collect(),
         None => set.to_vec(),

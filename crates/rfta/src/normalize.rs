@@ -397,4 +397,38 @@ mod tests {
         }
         assert!(listed > 1000 && held > 1000, "{listed} {held}");
     }
+
+    /// The final solve's side points read off the samples are, index by index, every sample
+    /// whose value is beyond the margin (on its sign's side) and none for those within it, then
+    /// the extra points; nothing past the end.
+    #[test]
+    fn the_side_points_are_the_samples_beyond_the_margin_then_the_extra_ones() {
+        use rfta_spsr::{SidePoint, SideSet};
+        let grid = Grid::new([4, 3, 2], DVec3::ZERO, DVec3::splat(0.5)).expect("grid");
+        // 0.001 and -0.0012 lie within the margin of 0.01 spacings (0.005); 16 samples beyond it.
+        let values: Vec<f64> = (0..grid.len())
+            .map(|i| [0.4, -0.3, 0.001, -0.0012, 0.7, -0.9][i % 6])
+            .collect();
+        let samples = SdfSamples::grid(grid, values.clone()).expect("samples");
+        let unit = UnitBox::new(&samples, None, None);
+        let extra = [SidePoint {
+            position: DVec3::splat(7.0),
+            inside: true,
+        }];
+        let sides = unit.sides(&extra);
+        assert_eq!(sides.len(), values.len() + 1);
+        for (i, &v) in values.iter().enumerate() {
+            let want = (v.abs() > 0.01 * 0.5).then(|| SidePoint {
+                position: unit.spheres[i].center,
+                inside: v < 0.0,
+            });
+            assert_eq!(sides.get(i), want, "sample {i} ({v})");
+        }
+        assert_eq!(sides.get(values.len()), Some(extra[0]));
+        assert_eq!(sides.get(values.len() + 1), None);
+        assert_eq!(
+            (0..sides.len()).filter(|&i| sides.get(i).is_some()).count(),
+            17
+        );
+    }
 }

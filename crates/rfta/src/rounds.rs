@@ -83,15 +83,7 @@ impl Rounds {
                         None => SphereTree::batch(&unit.spheres, params.batch_size, seed),
                         Some(pool) => SphereTree::with_indices(
                             &unit.spheres,
-                            &rfta_geom::rng::batch_with_replacement(
-                                pool.len(),
-                                params.batch_size,
-                                seed,
-                            )
-                            .map_or_else(
-                                || pool.clone(),
-                                |at| at.iter().map(|&k| pool[k as usize]).collect(),
-                            ),
+                            &crate::initial::draw_batch(pool, params.batch_size, seed),
                         ),
                     };
                     &batch
