@@ -285,6 +285,14 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
             r.repair.unsupported_removed
         ));
     }
+    if r.repair.sub_cell_handles_cut > 0 {
+        ui.detail(format!(
+            "cut {} handle(s) whose loop is shorter than {} of the final solve's cells (side {:.3e}): threads or pinholes where its function has a saddle at the iso-value",
+            r.repair.sub_cell_handles_cut,
+            rfta::SUB_CELL_LOOP,
+            r.final_solve.finest_cell
+        ));
+    }
     if r.final_solve.side_errors.len() > 1 {
         ui.detail(format!(
             "the final solve put {} samples on the wrong side of (or at) its surface; re-solved with them screened toward their side: {}",

@@ -1,5 +1,7 @@
-//! A known genus: every component joined to the largest, then the shortest loops around handles
-//! cut until the genus is reached.
+//! Handles cut: those narrower than the solve's finest cell ([`cut_sub_cell_handles`]), and,
+//! for a known genus, every component joined to the largest, then the shortest loops around
+//! handles cut until the genus is reached ([`to_genus`]); [`cut_disjoint`] is the pass both
+//! make.
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
@@ -7,7 +9,7 @@ use rfta_geom::glam::DVec3;
 use rfta_mesh::face_components;
 
 /// How far apart the two sides of a cut handle move, in sample spacings.
-const CUT_GAP: f64 = 0.05;
+pub const CUT_GAP: f64 = 0.05;
 
 /// A known genus: every component joined to the largest, then the shortest loops around handles
 /// cut until the genus is `genus`; loops are searched below `first` spacings `h` first, then below
@@ -45,30 +47,91 @@ pub fn to_genus(
             bound *= 2.0;
             continue;
         }
-        // Shortest first; loops of one basis that share no vertex are cut in one pass (disjoint
-        // and independent, they do not separate the surface: each takes one handle).
-        let mut touched = vec![false; mesh.vertices.len()];
-        let mut this_pass = 0;
-        for cycle in &loops.loops {
-            if this_pass == excess {
-                break;
-            }
-            if cycle.iter().any(|&v| touched[v as usize]) {
-                continue;
-            }
-            if rfta_mesh::cut_along(mesh, cycle, CUT_GAP * h) {
-                for &v in cycle {
-                    touched[v as usize] = true;
-                }
-                this_pass += 1;
-            }
-        }
+        let this_pass = cut_disjoint(mesh, &loops.loops, CUT_GAP * h, |_, cut| cut < excess);
         if this_pass == 0 {
             break;
         }
         cut += this_pass;
     }
     (joined, cut)
+}
+
+/// Cuts, in one pass, the loops of `cycles` (as [`rfta_mesh::ShortLoops::loops`] gives them,
+/// shortest first) for which `wanted(k, cut)` holds (`k` the loop's index, `cut` the number cut
+/// so far) and that share no vertex with one cut before it in the pass, the two sides `gap`
+/// apart ([`rfta_mesh::cut_along`]). Loops of one basis that share no vertex are disjoint and independent: no
+/// set of them separates the surface, so each cut takes one handle. Returns the number cut.
+///
+/// # Example
+/// ```
+/// use rfta_geom::shapes;
+///
+/// // A torus whose tube is 0.63 around: its one short loop cut, genus 1 to 0.
+/// let mut torus = shapes::torus(1.0, 0.1, 64, 16);
+/// let loops = rfta_mesh::short_loops(&torus, 1.0).expect("closed");
+/// assert_eq!(rfta_repair::cut_disjoint(&mut torus, &loops.loops, 0.01, |_, _| true), 1);
+/// assert_eq!(rfta_mesh::Topology::of(&torus).genus(), Some(0));
+/// ```
+pub fn cut_disjoint(
+    mesh: &mut TriMesh,
+    cycles: &[Vec<u32>],
+    gap: f64,
+    mut wanted: impl FnMut(usize, usize) -> bool,
+) -> usize {
+    let mut touched = vec![false; mesh.vertices.len()];
+    let mut cut = 0;
+    for (k, cycle) in cycles.iter().enumerate() {
+        if !wanted(k, cut) {
+            continue;
+        }
+        if cycle
+            .iter()
+            .any(|&v| touched.get(v as usize).is_none_or(|&t| t))
+        {
+            continue;
+        }
+        if rfta_mesh::cut_along(mesh, cycle, gap) {
+            for &v in cycle {
+                touched[v as usize] = true;
+            }
+            cut += 1;
+        }
+    }
+    cut
+}
+
+/// Cuts every handle of `mesh` whose loop is shorter than `cells` times `finest_cell`, the side
+/// of the finest cells of the solve the mesh was extracted from, the two sides `gap` apart; on
+/// meshes of genus up to `max_genus`. Returns the handles cut.
+///
+/// Such a handle is not a feature of the function the mesh is an iso-surface of: where the
+/// function has a saddle within a cell whose value is near the iso-value, the extraction joins
+/// or separates the two sides by the signs at the cell's corners, and a corner a hair inside
+/// (or outside) leaves a thread of material through it, or a pinhole through a wall, a fraction
+/// of a cell across. The cut is the other choice at that saddle.
+pub fn cut_sub_cell_handles(
+    mesh: &mut TriMesh,
+    finest_cell: f64,
+    cells: f64,
+    gap: f64,
+    max_genus: i64,
+) -> usize {
+    let mut cut = 0;
+    loop {
+        let genus = rfta_mesh::Topology::of(mesh).genus();
+        if genus.is_none_or(|g| g <= 0 || g > max_genus) {
+            break;
+        }
+        let Some(loops) = rfta_mesh::short_loops(mesh, cells * finest_cell) else {
+            break;
+        };
+        let this_pass = cut_disjoint(mesh, &loops.loops, gap, |_, _| true);
+        if this_pass == 0 {
+            break;
+        }
+        cut += this_pass;
+    }
+    cut
 }
 
 /// For each component but the largest (in face order), a face of it and the face of the largest

@@ -8,8 +8,11 @@
 //! - [`push_out_of_spheres`], [`clear_spheres`]: vertices out of the sample spheres the surface
 //!   enters (the surface may not enter a sample's sphere, §3 of the paper), faces split where they
 //!   cut a sphere no vertex is in.
+//! - [`cut_sub_cell_handles`]: the handles narrower than the solve's finest cell cut (the
+//!   extraction's choice at a saddle of the function near its iso-value, not a feature of it).
 //! - [`to_genus`]: a known genus reached, components joined by tubes and the shortest handle
-//!   loops cut ([`rfta_mesh::join`], [`rfta_mesh::cut_along`]).
+//!   loops cut ([`rfta_mesh::join`], [`rfta_mesh::cut_along`]; [`cut_disjoint`], the pass both
+//!   make).
 //! - [`cavity_openings`]: where a cavity's wall is one the samples leave undecided (outside
 //!   samples on both sides, next to each other on the grid): points for the caller to keep
 //!   outside, so that a gap or a hole the surface closed opens again.
@@ -50,7 +53,7 @@ pub use clear::{
 pub use components::{Island, remove_islands};
 pub use dent::{DENT_BELOW, DENT_MARGIN, dent_wrong_side};
 pub use edit::apply_moves;
-pub use genus::to_genus;
+pub use genus::{CUT_GAP, cut_disjoint, cut_sub_cell_handles, to_genus};
 pub use rfta_mesh::{face_components, signed_volume};
 
 /// The map from a mesh's coordinates into the spheres' frame: `(p - origin) / scale`.

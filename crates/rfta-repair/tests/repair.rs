@@ -5,8 +5,8 @@ use rfta_geom::{SdfSamples, Sphere, TriMesh, shapes};
 use rfta_mesh::Topology;
 use rfta_repair::edit::{Incidence, Splitter};
 use rfta_repair::{
-    Frame, Island, Spheres, apply_moves, clear_spheres, dent_wrong_side, face_components,
-    remove_islands, signed_volume, to_genus,
+    Frame, Island, Spheres, apply_moves, clear_spheres, cut_sub_cell_handles, dent_wrong_side,
+    face_components, remove_islands, signed_volume, to_genus,
 };
 
 /// The spacing of the dent tests' samples, and the pipeline's margin of a reliable side.
@@ -206,6 +206,52 @@ fn a_torus_told_genus_zero_loses_its_handle() {
     let t = Topology::of(&mesh);
     assert_eq!((t.genus(), t.components), (Some(0), 1));
     assert!(t.is_watertight());
+}
+
+/// Two tori 3 apart: one with a tube of radius 0.01, whose 12-gon meridian is
+/// `24 * 0.01 * sin(pi / 12) = 0.0621` around, and one with a tube ten times as thick (0.621).
+fn thin_and_thick_tori() -> TriMesh {
+    let mut mesh = shapes::torus(0.6, 0.01, 48, 12);
+    let thick = shapes::torus(0.6, 0.1, 48, 12);
+    let base = mesh.vertices.len() as u32;
+    mesh.vertices.extend(
+        thick
+            .vertices
+            .iter()
+            .map(|&v| v + DVec3::new(3.0, 0.0, 0.0)),
+    );
+    mesh.faces
+        .extend(thick.faces.iter().map(|f| f.map(|i| i + base)));
+    mesh
+}
+
+/// A handle whose loop is shorter than the given cells is cut; one longer is kept, as is every
+/// handle when the cells are small enough.
+#[test]
+fn handles_narrower_than_the_cells_are_cut_and_no_other() {
+    let mut mesh = thin_and_thick_tori();
+    assert_eq!(Topology::of(&mesh).genus(), Some(2));
+    // Two cells of 0.02: 0.04, shorter than either tube's loop.
+    assert_eq!(cut_sub_cell_handles(&mut mesh, 0.02, 2.0, 0.001, 256), 0);
+    assert_eq!(Topology::of(&mesh).genus(), Some(2));
+    // Two cells of 0.05: 0.1, longer than the thin tube's 0.0621 only.
+    assert_eq!(cut_sub_cell_handles(&mut mesh, 0.05, 2.0, 0.001, 256), 1);
+    let t = Topology::of(&mesh);
+    assert_eq!((t.genus(), t.components), (Some(1), 2));
+    assert!(t.is_watertight());
+    // The thick torus is untouched: its vertices are where they were.
+    let thick = thin_and_thick_tori();
+    let moved = thick
+        .vertices
+        .iter()
+        .zip(&mesh.vertices)
+        .filter(|(a, _)| a.x > 2.0)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(moved, 0);
+    // Above the genus bound nothing is searched.
+    let mut mesh = thin_and_thick_tori();
+    assert_eq!(cut_sub_cell_handles(&mut mesh, 0.05, 2.0, 0.001, 1), 0);
 }
 
 /// A split puts one vertex in a face (three faces for one, the area kept); a move that would turn

@@ -214,6 +214,10 @@ pub struct SpsrReport {
     pub cells_per_depth: Vec<usize>,
     /// The iso-value (weighted mean of the function at the samples).
     pub iso_value: f64,
+    /// The side of the finest cells the surface was extracted from, in the input's coordinates:
+    /// no loop of the mesh around a handle shorter than about this is a feature of the function
+    /// (the extraction's choice at a saddle of it near the iso-value, which a cell cannot resolve).
+    pub finest_cell: f64,
     /// With side points ([`reconstruct_with_sides`]): how many were on the wrong side after each
     /// solve, the last entry for the surface returned. Empty without them.
     pub side_errors: Vec<usize>,

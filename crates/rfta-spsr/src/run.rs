@@ -281,6 +281,7 @@ fn extract_surface(
         _ => &levels,
     };
     let mut ex = extract::extract(surface_levels, &values, iso);
+    let finest_cell = frame.side / f64::from(1u32 << (surface_levels.len() - 1));
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });
     }
@@ -303,6 +304,7 @@ fn extract_surface(
         nodes_per_depth: levels.iter().map(|l| l.nodes.len()).collect(),
         cells_per_depth: levels.iter().map(|l| l.cells.len()).collect(),
         iso_value: iso,
+        finest_cell,
         side_errors,
         broken_leaves: ex.broken_leaves,
         tree_time,

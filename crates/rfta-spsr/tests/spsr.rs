@@ -52,6 +52,14 @@ fn run(cloud: Cloud, params: &SpsrParams) -> Outcome {
     let points = OrientedPoints::new(p, n, None).expect("valid cloud");
     let out = reconstruct(&points, params).expect("reconstruction");
     assert_eq!(out.report.broken_leaves, 0);
+    // The finest cell: the cube (box_scale times the points' longest side) over 2^depth.
+    let b = points.bounds();
+    let cell = params.box_scale * (b.max - b.min).max_element() / f64::from(1u32 << params.depth);
+    assert!(
+        (out.report.finest_cell - cell).abs() < 1e-12 * cell,
+        "finest cell {} against {cell}",
+        out.report.finest_cell
+    );
     let d: Vec<f64> = out.mesh.vertices.iter().map(|&v| dist(v)).collect();
     eprintln!(
         "{} points: mean {:.3e} max {:.3e}",

@@ -67,8 +67,8 @@ pub use consistency::Consistency;
 pub use memory::{check_memory, estimate_peak_memory, format_bytes};
 pub use params::{
     CELLS_PER_SPACING, InitialPoints, MAX_THREADS, OWNER_BAND, PRESETS, Params, RASTER_REACH,
-    ROUND_FULL_DEPTH, ROUND_SWEEPS, SCREENING_FULL_DEPTH, SPSR_FULL_DEPTH, Seeds, screening_at,
-    spsr_depth_for,
+    ROUND_FULL_DEPTH, ROUND_SWEEPS, SCREENING_FULL_DEPTH, SPSR_FULL_DEPTH, SUB_CELL_LOOP, Seeds,
+    screening_at, spsr_depth_for,
 };
 pub use report::{
     FinalSolveReport, InitialReport, InputReport, MeshCheck, Reconstruction, RepairReport, Report,

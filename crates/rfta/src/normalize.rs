@@ -126,6 +126,11 @@ impl UnitBox {
         self.frame().to_frame(p)
     }
 
+    /// A unit-box length in the samples' coordinates.
+    pub(crate) fn to_input_length(&self, length: f64) -> f64 {
+        length * self.scale
+    }
+
     /// A unit-box point back in the samples' coordinates.
     pub(crate) fn to_input(&self, p: DVec3) -> DVec3 {
         self.frame().to_mesh(p)

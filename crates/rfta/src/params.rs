@@ -230,6 +230,18 @@ pub fn screening_at(screening: f64, depth: u32) -> f64 {
 /// at N = 30, so up to depth 10 the rounds stay the reference's.
 pub const ROUND_FULL_DEPTH: u32 = 10;
 
+/// Handles whose loop is shorter than this many of the final solve's finest cells are cut
+/// ([`crate::RepairReport::sub_cell_handles_cut`], `rfta_repair::cut_sub_cell_handles`): a
+/// thread or a pinhole the extraction leaves where the Poisson function has a saddle at the
+/// iso-value, not a feature of the function.
+///
+/// Measured (docs/faithfulness.md, "handles narrower than a cell"): the extra handles of the dev
+/// shapes at N = 100 (thingi44395 genus 3 of 2, thingi54725 13 of 11) and of fandisk at N = 50
+/// (2 of 0) have loops of 0.26 to 1.9 finest cells (0.02 to 0.16 spacings); cut below 2 cells,
+/// every dev shape at N = 100 has its genus in one piece and no thin loop, N = 50 seven of
+/// eight; below 4 cells also cuts handles of thingi54725 at N = 10 that it has (genus 9 of 11).
+pub const SUB_CELL_LOOP: f64 = 2.0;
+
 /// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
 /// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
 pub fn spsr_depth_for(h: f64) -> u32 {

@@ -216,6 +216,9 @@ pub struct FinalSolveReport {
     /// Spheres farther than [`crate::Params::owner_band`] from the surface: constraints that own
     /// no point (not counted in `spheres_without_point`).
     pub far_spheres: usize,
+    /// The side of the finest cells of the final solve, in the input's coordinates
+    /// ([`rfta_spsr::SpsrReport::finest_cell`]).
+    pub finest_cell: f64,
 }
 
 /// What the repair changed (step 6, `rfta-repair`'s steps).
@@ -224,6 +227,11 @@ pub struct RepairReport {
     /// Small closed islands removed from the final mesh because no sample witnesses them (see
     /// [`crate::Params::min_island`]).
     pub islands_removed: usize,
+    /// Handles cut because their loop is shorter than [`crate::SUB_CELL_LOOP`] of the final
+    /// solve's finest cells: the extraction's choice at a saddle of the Poisson function near
+    /// its iso-value, a thread or a pinhole a fraction of a cell across, not a feature of the
+    /// function ([`rfta_repair::cut_sub_cell_handles`]).
+    pub sub_cell_handles_cut: usize,
     /// Components removed from the final mesh because the samples contradict them: every vertex
     /// lies inside a sample sphere (by more than the tolerance), or they face inward with no
     /// other component around them.
@@ -386,9 +394,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 5 + 4 + 3 + 13 fields, the mesh check's 6, the consistency check's 6
+        // The stages' 4 + 5 + 4 + 4 + 14 fields, the mesh check's 6, the consistency check's 6
         // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 5 + 4 + 3 + 13 + 6 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 5 + 4 + 4 + 14 + 6 + 6 + 2, "{text}");
     }
 
     #[test]

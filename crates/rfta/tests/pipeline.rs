@@ -93,6 +93,14 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
         }
     }
     assert!(r.mesh.watertight && r.mesh.boundary_edges == 0 && r.mesh.components == 1);
+    // The final solve's finest cells: at most a CELLS_PER_SPACING-th of the spacing (the points'
+    // box is within the samples').
+    let h = samples.spacing();
+    let cell = r.final_solve.finest_cell;
+    assert!(
+        cell > 0.0 && cell <= h / rfta::CELLS_PER_SPACING,
+        "{cell} {h}"
+    );
     assert_eq!(r.input.inconsistent_samples, 0);
     assert_eq!(r.input.clamp, None);
     // Under 5% of the spheres: counted, not a warning.
@@ -589,6 +597,8 @@ fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
     let plain = reconstruct(&samples, &Params::default()).expect("reconstruct");
     let t = rfta_mesh::Topology::of(&plain.mesh);
     assert_eq!((t.genus(), t.components), (Some(1), 1));
+    // The tube's loop (1.26 around, 12.6 spacings) is no sub-cell handle.
+    assert_eq!(plain.report.repair.sub_cell_handles_cut, 0);
     let cut = asked(0);
     let t = rfta_mesh::Topology::of(&cut.mesh);
     assert!(t.is_watertight() && t.is_consistently_oriented(), "{t:?}");

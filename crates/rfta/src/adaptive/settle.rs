@@ -183,43 +183,26 @@ pub(crate) fn settle(
         let truth = ask(&centres)?;
         settled.asked += centres.len();
         let made = MeshIndex::new(mesh)?.signed_distances(&centres);
-        // Loops that share no vertex are cut in one round (disjoint and independent).
-        let mut touched = vec![false; mesh.vertices.len()];
-        let mut cut = 0;
-        for (k, (((cycle, f), d), length)) in cycles
-            .iter()
-            .zip(&truth)
-            .zip(&made)
-            .zip(&loops.lengths)
-            .enumerate()
-        {
+        // A handle is an artifact unless the function or a sample confirms it.
+        let artifact = |k: usize| {
+            let (Some(&f), Some(&d)) = (truth.get(k), made.get(k)) else {
+                return false;
+            };
             // A real bar or tunnel of radius r = length / 2 pi has the function about r deep on
             // its side at its centre: between r / 4 and 4 r is asked for.
-            let r = length / std::f64::consts::TAU;
-            let deep = if *d < 0.0 { -*f } else { *f };
+            let r = loops.lengths[k] / std::f64::consts::TAU;
+            let deep = if d < 0.0 { -f } else { f };
             // A sample of the handle's own side near its centre (material in a bar, empty space
             // in a tunnel) supports it too: cutting would put that sample on the wrong side.
-            let centre = centres[k];
             let witness = (0..samples.len()).any(|i| {
                 let v = samples.values()[i];
                 v != 0.0
-                    && (v < 0.0) == (*d < 0.0)
-                    && samples.position(i).distance(centre) < WITNESS_REACH * r
+                    && (v < 0.0) == (d < 0.0)
+                    && samples.position(i).distance(centres[k]) < WITNESS_REACH * r
             });
-            let confirmed = witness || (DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep);
-            let artifact = !confirmed;
-            if !artifact || cycle.iter().any(|&v| touched[v as usize]) {
-                continue;
-            }
-            if rfta_mesh::cut_along(mesh, cycle, gap) {
-                for &v in cycle {
-                    if let Some(t) = touched.get_mut(v as usize) {
-                        *t = true;
-                    }
-                }
-                cut += 1;
-            }
-        }
+            !(witness || (DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep))
+        };
+        let cut = rfta_repair::cut_disjoint(mesh, &cycles, gap, |k, _| artifact(k));
         settled.cut += cut;
         if cut == 0 {
             break;

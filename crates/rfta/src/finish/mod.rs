@@ -27,8 +27,8 @@ use crate::{Consistency, MeshCheck, Params, Report, Result, Stage, Step, check, 
 
 use islands::{inverted_and_unenclosed, judge};
 use rfta_repair::{
-    CLEAR_BELOW, Island, PUSH_DEPTH, clear_spheres, dent_wrong_side, push_out_of_spheres,
-    remove_islands, to_genus,
+    CLEAR_BELOW, CUT_GAP, Island, PUSH_DEPTH, clear_spheres, cut_sub_cell_handles, dent_wrong_side,
+    push_out_of_spheres, remove_islands, to_genus,
 };
 
 /// What the final solve and the repair hand back: the mesh and the final points in the input's
@@ -53,7 +53,8 @@ pub(crate) fn finish(
     progress(Stage::Final);
     let cloud = rounds.cloud;
     let (mesh, mut final_solve) = final_solve(unit, params, &cloud, &[], journal)?;
-    let (mut mesh, mut repair) = repair(samples, unit, params, mesh, journal);
+    let cell = final_solve.finest_cell;
+    let (mut mesh, mut repair) = repair(samples, unit, params, mesh, cell, journal);
     if !params.keep_cavities
         && repair.cavities > 0
         && let Some(grid) = samples.as_grid()
@@ -95,6 +96,7 @@ fn final_solve(
     let sides = unit.sides(extra);
     let solved = crate::rounds::solve(cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
     report.side_errors = solved.report.side_errors;
+    report.finest_cell = unit.to_input_length(solved.report.finest_cell);
     let mut mesh = solved.mesh;
     journal.timed(Step::FinalSolve, t);
     let n = unit.len();
@@ -155,7 +157,7 @@ fn open_cavities(
         // The re-solve's and the repair's own steps are timed together as one.
         let mut scratch = Journal::default();
         let (mesh, solve) = final_solve(unit, params, cloud, &extra, &mut scratch)?;
-        let (mesh, repair) = repair(samples, unit, params, mesh, &mut scratch);
+        let (mesh, repair) = repair(samples, unit, params, mesh, solve.finest_cell, &mut scratch);
         if repair.cavities >= best.repair.cavities {
             break;
         }
@@ -172,8 +174,9 @@ fn open_cavities(
     Ok(best)
 }
 
-/// Repair: components the samples contradict or do not witness removed, samples near the
-/// surface on the wrong side dented past, vertices inside near sample spheres pushed out and
+/// Repair: components the samples contradict or do not witness removed, the handles narrower
+/// than the solve's finest cells (`cell`, input coordinates) cut, samples near the surface on the
+/// wrong side dented past, vertices inside near sample spheres pushed out and
 /// every sphere up to [`CLEAR_BELOW`] owner radii cleared, dents again, a known genus reached,
 /// the cavities counted.
 fn repair(
@@ -181,6 +184,7 @@ fn repair(
     unit: &UnitBox,
     params: &Params,
     mut mesh: TriMesh,
+    cell: f64,
     journal: &mut Journal,
 ) -> (TriMesh, RepairReport) {
     let mut report = RepairReport::default();
@@ -205,6 +209,13 @@ fn repair(
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
+    report.sub_cell_handles_cut = cut_sub_cell_handles(
+        &mut mesh,
+        cell,
+        crate::SUB_CELL_LOOP,
+        CUT_GAP * samples.spacing(),
+        consistency::THIN_LOOP_MAX_GENUS,
+    );
     journal.timed(Step::Components, t);
     crate::pool::waiters_back();
     let t = Instant::now();
