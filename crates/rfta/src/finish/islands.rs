@@ -95,13 +95,15 @@ pub(super) fn judge(
     {
         return Some(Island::Unsupported);
     }
-    // A small closed component needs a witness: a sample inside it, or some sample's sphere
-    // that reaches it and no farther part of the surface: a thin part between the samples,
-    // which no sample lies in, is where the spheres around it touch (without it they would have
-    // gaps).
+    // A small closed component needs a witness: a sample inside it, or, for a part (not a
+    // cavity), some sample's sphere that reaches it and no farther part of the surface: a thin
+    // part between the samples, which no sample lies in, is where the spheres around it touch
+    // (without it they would have gaps). A cavity no sample lies in is a sealed bubble the
+    // samples do not show, whatever spheres its wall touches.
     if diag < params.min_island * h
         && !encloses_witness()
-        && !closes_gap(unit, &tree, main, mesh, faces, &vertices)
+        && (signed_volume(mesh, faces) < 0.0
+            || !closes_gap(unit, &tree, main, mesh, faces, &vertices))
     {
         return Some(Island::Small);
     }

@@ -255,6 +255,11 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
     let thin_c = DVec3::new(0.75, 0.05, 0.05);
     let thin = samples(&|p| ball_sdf(p).min((p - thin_c).length() - 0.03));
     assert_eq!(judge_on(&thin, &ball(thin_c, 0.03)), None);
+    // The same wall facing inward, a bubble no sample lies in, goes, though the same spheres
+    // touch it: a cavity needs a sample inside.
+    let mut bubble = ball(thin_c, 0.03);
+    bubble.flip();
+    assert_eq!(judge_on(&thin, &bubble), Some(Island::Small));
     assert_eq!(
         judge_on(&plain, &ball(thin_c, 0.03)),
         Some(Island::Unsupported)
