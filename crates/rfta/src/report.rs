@@ -54,7 +54,7 @@ pub enum Step {
     Components,
     /// Dents, and sample spheres cleared.
     SpheresCleared,
-    /// A known genus reached.
+    /// Handles narrower than the final solve's finest cells cut, and a known genus reached.
     Topology,
     /// Cavities the samples leave open opened (a final solve and a repair again).
     Cavities,
@@ -285,7 +285,12 @@ pub(crate) struct Journal {
 impl Journal {
     /// `step` took from `start` until now.
     pub(crate) fn timed(&mut self, step: Step, start: std::time::Instant) {
-        self.timings.push((step, start.elapsed()));
+        self.took(step, start.elapsed());
+    }
+
+    /// `step` took `time` (for a step timed in parts).
+    pub(crate) fn took(&mut self, step: Step, time: Duration) {
+        self.timings.push((step, time));
     }
 }
 

@@ -93,14 +93,19 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
         }
     }
     assert!(r.mesh.watertight && r.mesh.boundary_edges == 0 && r.mesh.components == 1);
-    // The final solve's finest cells: at most a CELLS_PER_SPACING-th of the spacing (the points'
-    // box is within the samples').
+    // The final solve's finest cells, in the samples' coordinates: the reference's cube, 3.2
+    // times the final points' longest extent, over 2^depth; at most a CELLS_PER_SPACING-th of
+    // the spacing (the points' box is within the samples').
     let h = samples.spacing();
     let cell = r.final_solve.finest_cell;
+    let bounds = rfta::geom::Aabb::from_points(&out.points.points);
+    let expected =
+        3.2 * (bounds.max - bounds.min).max_element() / f64::from(1u32 << r.rounds.spsr_depth);
     assert!(
-        cell > 0.0 && cell <= h / rfta::CELLS_PER_SPACING,
-        "{cell} {h}"
+        (cell - expected).abs() < 1e-9 * expected,
+        "{cell} {expected}"
     );
+    assert!(cell <= h / rfta::CELLS_PER_SPACING, "{cell} {h}");
     assert_eq!(r.input.inconsistent_samples, 0);
     assert_eq!(r.input.clamp, None);
     // Under 5% of the spheres: counted, not a warning.

@@ -209,6 +209,9 @@ fn repair(
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
+    journal.timed(Step::Components, t);
+    // Before the clearing, which then clears what the caps enter.
+    let t = Instant::now();
     report.sub_cell_handles_cut = cut_sub_cell_handles(
         &mut mesh,
         cell,
@@ -216,7 +219,7 @@ fn repair(
         CUT_GAP * samples.spacing(),
         consistency::THIN_LOOP_MAX_GENUS,
     );
-    journal.timed(Step::Components, t);
+    let mut topology = t.elapsed();
     crate::pool::waiters_back();
     let t = Instant::now();
     // First radially out of the spheres that own points (near the surface and small, so the
@@ -257,8 +260,9 @@ fn repair(
             consistency::THIN_LOOP,
             consistency::THIN_LOOP_MAX_GENUS,
         );
-        journal.timed(Step::Topology, t);
+        topology += t.elapsed();
     }
+    journal.took(Step::Topology, topology);
     report.cavities = rfta_mesh::cavities(&mesh).len();
     (mesh, report)
 }
