@@ -26,7 +26,7 @@ struct Face {
 }
 
 /// The tree over triangles `corners`: nodes in depth-first order (a node's children after it,
-/// leaves indexing positions of the returned face order, slabs not yet filled) and the faces in
+/// leaves indexing positions of the returned face order, oriented boxes not yet filled) and the faces in
 /// leaf order.
 pub(crate) fn build(corners: &[[DVec3; 3]]) -> (Vec<Node>, Vec<u32>) {
     let faces: Vec<Face> = corners

@@ -40,7 +40,7 @@ pub(crate) struct Moments {
     /// Total area.
     area: f64,
     /// Sum of area-weighted unit normals (`sum_t a_t n_t`); also the direction of the node's
-    /// slab (`bvh::Slab`).
+    /// oriented box (`bvh::OrientedBox`).
     pub(crate) normal: DVec3,
     /// Expansion centre (area-weighted centroid).
     center: DVec3,
