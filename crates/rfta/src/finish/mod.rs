@@ -206,6 +206,8 @@ fn repair(
             judge(unit, params, main.as_ref(), &mesh, faces, bounds)
         },
     );
+    // The two indices are as large as the mesh: gone before the clearing indexes it again.
+    drop((main, whole));
     mesh = kept;
     report.islands_removed = removed[Island::Small as usize];
     report.unsupported_removed = removed[Island::Unsupported as usize];
