@@ -26,8 +26,8 @@ struct Face {
 }
 
 /// The tree over triangles `corners`: nodes in depth-first order (a node's children after it,
-/// leaves indexing positions of the returned face order, oriented boxes not yet filled) and the faces in
-/// leaf order.
+/// leaves indexing positions of the returned face order, oriented boxes not yet filled) and the
+/// faces in leaf order.
 pub(crate) fn build(corners: &[[DVec3; 3]]) -> (Vec<Node>, Vec<u32>) {
     let faces: Vec<Face> = corners
         .par_iter()
@@ -37,17 +37,70 @@ pub(crate) fn build(corners: &[[DVec3; 3]]) -> (Vec<Node>, Vec<u32>) {
         })
         .collect();
     let mut order: Vec<u32> = (0..corners.len() as u32).collect();
-    let nodes = subtree(&faces, &mut order, 0);
+    let part = subtree(&faces, &mut order, 0);
+    let mut nodes = Vec::with_capacity(part.len());
+    part.flatten(&mut nodes);
     (nodes, order)
 }
 
-/// The subtree over `order` (positions `first..` of the final face order), children indexed
-/// from the start of the returned nodes.
-fn subtree(faces: &[Face], order: &mut [u32], first: u32) -> Vec<Node> {
+/// A subtree as built: one thread's nodes (children indexed from the first of them), or two
+/// subtrees built side by side under a node of their own. Flattened once at the end, so that each
+/// node is copied once however many levels were built in parallel.
+enum Part {
+    Serial(Vec<Node>),
+    Join {
+        left: Box<Part>,
+        right: Box<Part>,
+        len: usize,
+    },
+}
+
+impl Part {
+    /// Nodes in the subtree.
+    fn len(&self) -> usize {
+        match self {
+            Part::Serial(nodes) => nodes.len(),
+            Part::Join { len, .. } => *len,
+        }
+    }
+
+    /// Appends the subtree to `out` depth first (a node, its left subtree, its right subtree);
+    /// returns its root's index there.
+    fn flatten(self, out: &mut Vec<Node>) -> u32 {
+        match self {
+            Part::Serial(nodes) => {
+                let offset = out.len() as u32;
+                out.extend(nodes.into_iter().map(|n| {
+                    if n.leaf {
+                        n
+                    } else {
+                        Node {
+                            a: n.a + offset,
+                            b: n.b + offset,
+                            ..n
+                        }
+                    }
+                }));
+                offset
+            }
+            Part::Join { left, right, .. } => {
+                let my = out.len();
+                out.push(Node::PENDING);
+                let l = left.flatten(out);
+                let r = right.flatten(out);
+                out[my] = Node::inner(out, l, r);
+                my as u32
+            }
+        }
+    }
+}
+
+/// The subtree over `order` (positions `first..` of the final face order).
+fn subtree(faces: &[Face], order: &mut [u32], first: u32) -> Part {
     if order.len() < PARALLEL_FROM {
         let mut nodes = Vec::with_capacity(order.len());
         grow(faces, order, first, &mut nodes);
-        return nodes;
+        return Part::Serial(nodes);
     }
     let mid = split(faces, order);
     let (lo, hi) = order.split_at_mut(mid);
@@ -55,24 +108,11 @@ fn subtree(faces: &[Face], order: &mut [u32], first: u32) -> Vec<Node> {
         || subtree(faces, lo, first),
         || subtree(faces, hi, first + mid as u32),
     );
-    let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
-    nodes.push(Node::PENDING);
-    let right_root = 1 + left.len() as u32;
-    for (part, offset) in [(&left, 1), (&right, right_root)] {
-        nodes.extend(part.iter().map(|n| {
-            if n.leaf {
-                *n
-            } else {
-                Node {
-                    a: n.a + offset,
-                    b: n.b + offset,
-                    ..*n
-                }
-            }
-        }));
+    Part::Join {
+        len: 1 + left.len() + right.len(),
+        left: Box::new(left),
+        right: Box::new(right),
     }
-    nodes[0] = Node::inner(&nodes, 1, right_root);
-    nodes
 }
 
 /// Appends the subtree over `order` (positions `first..` of the final face order) to `nodes`;
