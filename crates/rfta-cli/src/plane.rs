@@ -101,6 +101,12 @@ pub(crate) fn reconstruct(
         r.depth,
         summary(&out.curve)
     ));
+    if r.holes_opened > 0 {
+        ui.say(format!(
+            "opened {} hole(s) the curve closed around outside samples, through a wall thinner than a spacing that no inside sample shows (--keep-cavities keeps them)",
+            r.holes_opened
+        ));
+    }
     rfta_io::write_polylines(output, &out.curve)?;
     ui.say(format!("wrote {}", output.display()));
     if let Some(path) = extras.report {

@@ -146,8 +146,8 @@ pub(crate) struct Tuning {
     #[serde(skip_serializing_if = "Option::is_none")]
     genus: Option<usize>,
     /// Keep the cavities the surface seals around outside samples where the grid leaves them
-    /// open (a gap or a hole closed); by default they are opened. Voids walled in by inside
-    /// samples are kept either way.
+    /// open (a gap or a hole closed; in 2D, holes of the curve); by default they are opened.
+    /// Voids walled in by inside samples are kept either way.
     #[arg(long)]
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     keep_cavities: bool,

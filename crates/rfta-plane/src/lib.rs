@@ -6,7 +6,8 @@
 //! - [`raster::empty_space`]: cells no circle of one sign covers, next to covered ones;
 //! - [`arcs`]: the exact free arcs of each circle, the initial points ([`initial_points`]), one
 //!   fine-tuning round against a polyline ([`arcs::Owners::fine_tune`]);
-//! - [`spsr`]: screened Poisson on a complete quadtree, the curve by marching squares.
+//! - [`spsr`]: screened Poisson on a complete quadtree, the curve by marching squares;
+//! - [`holes`]: the holes the curve closes around outside samples, opened.
 //!
 //! # Example
 //! ```
@@ -37,6 +38,7 @@
 //! ```
 
 pub mod arcs;
+pub mod holes;
 pub mod raster;
 pub mod spsr;
 

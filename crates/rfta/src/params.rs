@@ -100,6 +100,7 @@ pub struct Params {
     /// wall between them holds no inside sample), is opened: the final solve is run again with a
     /// point in each such gap kept outside ([`rfta_repair::cavity_openings`]). A cavity walled in
     /// by inside samples all round (a hollow ball) is kept either way. Scattered samples: kept.
+    /// In 2D the same for the holes of the curve ([`crate::plane`], `rfta_plane::holes`).
     pub keep_cavities: bool,
     /// Where the initial tangency points come from: on grids, by default, the closest surface
     /// point each sample's gradient points to ([`InitialPoints::Gradient`]); the paper's

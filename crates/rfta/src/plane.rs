@@ -56,6 +56,13 @@ pub struct Report2 {
     pub loops: usize,
     /// Small loops removed because no sample supports them (see [`Params::min_island`]).
     pub islands_removed: usize,
+    /// Holes around outside samples opened through a wall that no inside sample shows (unless
+    /// [`Params::keep_cavities`]; grids only: [`rfta_plane::holes`]).
+    pub holes_opened: usize,
+    /// Holes around outside samples in the output: walled in by inside samples (a void the
+    /// samples show), or kept by [`Params::keep_cavities`] or for want of a channel that enters no
+    /// circle.
+    pub holes: usize,
     /// Seconds, whole reconstruction.
     pub seconds: f64,
 }
@@ -182,6 +189,22 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     }
     let curve = solve(&cloud, true)?.curve();
     let (mut curve, islands) = drop_islands(curve, &circles, &values, spacing, params.min_island);
+    let holes = samples.as_grid().map(|g| {
+        // The grid in the unit square, its positions the circles' centres.
+        let unit =
+            rfta_geom::plane::Grid2::new(g.dims(), (g.origin() - lo) / scale, g.spacing() / scale);
+        let margin = crate::consistency::ENTER_MARGIN * spacing;
+        match unit {
+            Ok(grid) if !params.keep_cavities => {
+                rfta_plane::holes::open_holes(&mut curve, &grid, &values, &circles, margin)
+            }
+            Ok(grid) => rfta_plane::holes::Opened {
+                opened: 0,
+                kept: rfta_plane::holes::enclosing(&curve, &grid, &values),
+            },
+            Err(_) => rfta_plane::holes::Opened::default(),
+        }
+    });
     for v in &mut curve.vertices {
         *v = *v * scale + lo;
     }
@@ -199,6 +222,8 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         rounds,
         loops: curve.loops(),
         islands_removed: islands,
+        holes_opened: holes.as_ref().map_or(0, |h| h.opened),
+        holes: holes.as_ref().map_or(0, |h| h.kept),
         seconds: start.elapsed().as_secs_f64(),
     };
     Ok(Reconstruction2 {

@@ -231,3 +231,39 @@ fn removed_loops_take_their_vertices_with_them() {
     }
     assert!(removed > 0, "no loop was removed: the sweep tests nothing");
 }
+
+/// A ring whose wall (0.08) is thinner than the spacing (0.125): grid edges cross it from an
+/// outside sample in the hole to one beyond, so the samples cannot tell it from a ring cut open,
+/// and the default opens the hole the curve closes (one loop); `keep_cavities` keeps it (two
+/// loops, the hole counted). Either way every sample stays on its side.
+#[test]
+fn a_hole_behind_a_wall_no_sample_shows_is_opened_unless_kept() {
+    let thin = |p: DVec2| ((p - DVec2::new(0.03, 0.02)).length() - 0.52).abs() - 0.04;
+    let samples = grid_samples(16, thin);
+    let kept = plane::reconstruct(
+        &samples,
+        &Params {
+            keep_cavities: true,
+            ..Params::default()
+        },
+    )
+    .expect("reconstructs");
+    let opened = plane::reconstruct(&samples, &Params::default()).expect("reconstructs");
+    assert_eq!((kept.curve.loops(), kept.report.holes), (2, 1));
+    assert_eq!(kept.report.holes_opened, 0);
+    assert_eq!(
+        (
+            opened.curve.loops(),
+            opened.report.holes_opened,
+            opened.report.holes
+        ),
+        (1, 1, 0)
+    );
+    for out in [&kept, &opened] {
+        assert!(out.curve.is_closed());
+        let index = PolylineIndex::new(&out.curve);
+        for (p, &s) in samples.positions().iter().zip(samples.values()) {
+            assert_eq!(index.winding(*p) != 0, s < 0.0, "{p} {s}");
+        }
+    }
+}
