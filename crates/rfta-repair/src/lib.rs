@@ -41,6 +41,7 @@ mod components;
 mod dent;
 pub mod edit;
 mod genus;
+mod tunnel;
 
 use rfta_geom::Sphere;
 use rfta_geom::glam::DVec3;
@@ -55,6 +56,7 @@ pub use dent::{DENT_BELOW, DENT_MARGIN, dent_wrong_side};
 pub use edit::apply_moves;
 pub use genus::{CUT_GAP, cut_disjoint, cut_sub_cell_handles, to_genus};
 pub use rfta_mesh::{face_components, signed_volume};
+pub use tunnel::tunnel_cavities;
 
 /// The map from a mesh's coordinates into the spheres' frame: `(p - origin) / scale`.
 #[derive(Debug, Clone, Copy, PartialEq)]

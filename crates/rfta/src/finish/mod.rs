@@ -170,8 +170,48 @@ fn open_cavities(
             break;
         }
     }
+    if best.repair.cavities > 0 {
+        tunnel(samples, grid, unit, &mut best);
+    }
     best.repair.cavities_opened = found - best.repair.cavities;
     Ok(best)
+}
+
+/// The cavities the re-solves closed again, joined to the surface beyond them by a tube through
+/// the wall along a grid edge of [`rfta_repair::cavity_openings`] ([`rfta_repair::tunnel_cavities`]),
+/// kept only if the mesh stays closed and manifold and puts no more samples on the wrong side
+/// nor enters more spheres.
+fn tunnel(samples: &SdfSamples, grid: &rfta_geom::Grid, unit: &UnitBox, best: &mut Opened) {
+    let openings = rfta_repair::cavity_openings(&best.mesh, &unit.sphere_set(), grid);
+    let paths: Vec<_> = openings
+        .edges
+        .iter()
+        .map(|&[i, j]| [grid.position(i), grid.position(j)])
+        .collect();
+    let mut mesh = best.mesh.clone();
+    if rfta_repair::tunnel_cavities(&mut mesh, &paths) == 0 {
+        return;
+    }
+    let topology = rfta_mesh::Topology::of(&mesh);
+    if !(topology.is_watertight() && topology.is_manifold() && topology.is_consistently_oriented())
+    {
+        return;
+    }
+    let clamp = unit
+        .clamp
+        .is_finite()
+        .then(|| unit.to_input_length(unit.clamp));
+    let (Ok(before), Ok(after)) = (
+        consistency::measure(samples, &best.mesh, clamp),
+        consistency::measure(samples, &mesh, clamp),
+    ) else {
+        return;
+    };
+    if after.sign_errors > before.sign_errors || after.entered > before.entered {
+        return;
+    }
+    best.repair.cavities = rfta_mesh::cavities(&mesh).len();
+    best.mesh = mesh;
 }
 
 /// Repair: components the samples contradict or do not witness removed, the handles narrower
