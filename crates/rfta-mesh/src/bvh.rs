@@ -277,17 +277,7 @@ impl MeshIndex {
     /// the extents above that size bound far-off queries, which the children's corners do about
     /// as well).
     fn fill_oriented_boxes(&mut self) {
-        // Each node's range of `tris`, bottom-up: children come after their parent.
-        let mut range = vec![(0u32, 0u32); self.nodes.len()];
-        for i in (0..self.nodes.len()).rev() {
-            let node = self.nodes[i];
-            range[i] = if node.leaf {
-                (node.a, node.b)
-            } else {
-                let (l, r) = (range[node.a as usize], range[node.b as usize]);
-                (l.0.min(r.0), l.1 + r.1)
-            };
-        }
+        let range = self.ranges();
         let tris = &self.tris;
         let small: Vec<Option<OrientedBox>> = range
             .par_iter()
@@ -316,6 +306,22 @@ impl MeshIndex {
                     OrientedBox::around(self.moments[i].normal.normalize_or_zero(), corners);
             }
         }
+    }
+
+    /// Each node's triangles, a contiguous range of `tris` (first, count): computed bottom-up,
+    /// children coming after their parent.
+    fn ranges(&self) -> Vec<(u32, u32)> {
+        let mut range = vec![(0u32, 0u32); self.nodes.len()];
+        for i in (0..self.nodes.len()).rev() {
+            let node = self.nodes[i];
+            range[i] = if node.leaf {
+                (node.a, node.b)
+            } else {
+                let (l, r) = (range[node.a as usize], range[node.b as usize]);
+                (l.0.min(r.0), l.1 + r.1)
+            };
+        }
+        range
     }
 
     /// Number of triangles.
@@ -538,17 +544,8 @@ mod tests {
             let mesh = rfta_geom::shapes::torus(1.0, 0.3, 24, 12);
             let index = MeshIndex::new(&mesh).map_err(|e| TestCaseError::fail(e.to_string()))?;
             let p = DVec3::new(x, y, z);
-            let mut range = vec![(0u32, 0u32); index.nodes.len()];
-            for i in (0..index.nodes.len()).rev() {
-                let node = index.nodes[i];
-                range[i] = if node.leaf {
-                    (node.a, node.a + node.b)
-                } else {
-                    let (l, r) = (range[node.a as usize], range[node.b as usize]);
-                    (l.0.min(r.0), l.1.max(r.1))
-                };
-            }
-            for (node, &(first, end)) in index.nodes.iter().zip(&range) {
+            for (node, (first, count)) in index.nodes.iter().zip(index.ranges()) {
+                let end = first + count;
                 let nearest = index.tris[first as usize..end as usize]
                     .iter()
                     .map(|&[a, b, c]| p.distance_squared(kernels::closest_point_on_triangle(p, a, b, c).0))
@@ -581,18 +578,9 @@ mod tests {
     fn oriented_boxes_hold_their_triangles_above_the_exact_size_too() -> Result<()> {
         let mesh = rfta_geom::shapes::icosphere(1.0, 5);
         let index = MeshIndex::new(&mesh)?;
-        let mut range = vec![(0u32, 0u32); index.nodes.len()];
-        for i in (0..index.nodes.len()).rev() {
-            let node = index.nodes[i];
-            range[i] = if node.leaf {
-                (node.a, node.a + node.b)
-            } else {
-                let (l, r) = (range[node.a as usize], range[node.b as usize]);
-                (l.0.min(r.0), l.1.max(r.1))
-            };
-        }
         let mut from_children = 0;
-        for (node, &(first, end)) in index.nodes.iter().zip(&range) {
+        for (node, (first, count)) in index.nodes.iter().zip(index.ranges()) {
+            let end = first + count;
             let b = &node.oriented;
             if (end - first) as usize > EXACT_BOX {
                 from_children += 1;

@@ -56,14 +56,7 @@ pub fn open_holes(
             if failed.contains(&hole.edges) {
                 continue;
             }
-            let one = Polylines {
-                vertices: curve.vertices.clone(),
-                edges: hole
-                    .edges
-                    .iter()
-                    .map(|&e| curve.edges[e as usize])
-                    .collect(),
-            };
+            let one = hole.alone(curve);
             let index = PolylineIndex::new(&one);
             let inside: Vec<bool> = (0..grid.len())
                 .map(|i| beyond[i] && index.winding(grid.position(i)) != 0)
@@ -111,14 +104,7 @@ pub fn enclosing(curve: &Polylines, grid: &Grid2, values: &[f64]) -> usize {
     holes(curve)
         .iter()
         .filter(|hole| {
-            let one = Polylines {
-                vertices: curve.vertices.clone(),
-                edges: hole
-                    .edges
-                    .iter()
-                    .map(|&e| curve.edges[e as usize])
-                    .collect(),
-            };
+            let one = hole.alone(curve);
             let index = PolylineIndex::new(&one);
             (0..grid.len()).any(|i| values[i] > 0.0 && index.winding(grid.position(i)) != 0)
         })
@@ -128,6 +114,20 @@ pub fn enclosing(curve: &Polylines, grid: &Grid2, values: &[f64]) -> usize {
 /// A loop of the curve: its edges (indices into `Polylines::edges`) in order.
 struct Loop {
     edges: Vec<u32>,
+}
+
+impl Loop {
+    /// The loop as polylines of its own (the curve's vertices, its edges).
+    fn alone(&self, curve: &Polylines) -> Polylines {
+        Polylines {
+            vertices: curve.vertices.clone(),
+            edges: self
+                .edges
+                .iter()
+                .map(|&e| curve.edges[e as usize])
+                .collect(),
+        }
+    }
 }
 
 /// The clockwise loops of a closed curve (negative signed area: outside lies within them), each
