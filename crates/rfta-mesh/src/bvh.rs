@@ -438,6 +438,30 @@ impl MeshIndex {
     /// [`kernels::segment_triangle`]): a collision query, as a moving point's path from one time
     /// step to the next.
     pub fn segment_hits(&self, a: DVec3, b: DVec3) -> bool {
+        let mut hit = false;
+        self.along_segment(a, b, |_, _| {
+            hit = true;
+            false
+        });
+        hit
+    }
+
+    /// Every crossing of the segment from `a` to `b` with the mesh (as [`MeshIndex::segment_hits`]
+    /// counts them), as the segment's parameter in `[0, 1]` and the face crossed, in order along
+    /// the segment (ties by face).
+    pub fn segment_crossings(&self, a: DVec3, b: DVec3) -> Vec<(f64, u32)> {
+        let mut crossings = Vec::new();
+        self.along_segment(a, b, |t, face| {
+            crossings.push((t, face));
+            true
+        });
+        crossings.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        crossings
+    }
+
+    /// The traversal behind the segment queries: `visit(t, face)` for each crossing, in no
+    /// particular order, until it returns false.
+    fn along_segment(&self, a: DVec3, b: DVec3, mut visit: impl FnMut(f64, u32) -> bool) {
         let dir = b - a;
         // Slab test of the segment against a box, with the reciprocal direction precomputed.
         let inv = DVec3::ONE / dir;
@@ -465,19 +489,19 @@ impl MeshIndex {
                 continue;
             }
             if node.leaf {
-                let hit = (node.a..node.a + node.b).any(|t| {
+                for t in node.a..node.a + node.b {
                     let [p0, p1, p2] = self.tris[t as usize];
-                    kernels::segment_triangle(a, b, p0, p1, p2).is_some()
-                });
-                if hit {
-                    return true;
+                    if let Some(s) = kernels::segment_triangle(a, b, p0, p1, p2)
+                        && !visit(s, self.face_ids[t as usize])
+                    {
+                        return;
+                    }
                 }
             } else {
                 stack.push(node.a);
                 stack.push(node.b);
             }
         }
-        false
     }
 
     /// Distance from `p` to the mesh.

@@ -11,7 +11,8 @@
 //! - [`MeshIndex::winding_number`]: the generalized winding number (Jacobson et al. 2013),
 //!   evaluated hierarchically with far-field expansions (Barill et al. 2018); exact for nearby
 //!   triangles.
-//! - [`MeshIndex::segment_hits`]: whether a segment crosses the mesh (collision queries).
+//! - [`MeshIndex::segment_hits`]: whether a segment crosses the mesh (collision queries);
+//!   [`MeshIndex::segment_crossings`]: where, and which faces.
 //! - [`MeshIndex::signed_distance`]: the unsigned distance, negative where the winding number
 //!   exceeds 1/2 (libigl's convention), so it works on meshes with small holes too.
 //! - [`sample_surface`]: area-weighted random points with a seed.

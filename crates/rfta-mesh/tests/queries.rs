@@ -253,21 +253,26 @@ proptest! {
     }
 
     #[test]
-    fn segment_hits_equal_brute_force_on_random_soups(seed in 0u64..10_000, n in 1usize..60) {
+    fn segment_queries_equal_brute_force_on_random_soups(seed in 0u64..10_000, n in 1usize..60) {
         let mut rng = Rng::new(seed);
         let (mesh, index) = random_soup(&mut rng, n);
         let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        // Every crossing, face by face, in order along the segment (ties by face).
         let brute = |a: DVec3, b: DVec3| {
-            mesh.faces.iter().any(|&[i, j, k]| {
-                let v = &mesh.vertices;
-                kernels::segment_triangle(a, b, v[i as usize], v[j as usize], v[k as usize]).is_some()
-            })
+            let v = &mesh.vertices;
+            let mut hits: Vec<(f64, u32)> = mesh.faces.iter().enumerate().filter_map(|(f, &[i, j, k])| {
+                kernels::segment_triangle(a, b, v[i as usize], v[j as usize], v[k as usize]).map(|t| (t, f as u32))
+            }).collect();
+            hits.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            hits
         };
         for i in 0..40 {
             let a = r() * 3.0 - DVec3::ONE;
             // Some segments run along an axis, where the box test divides by zero.
             let b = if i % 4 == 0 { a + DVec3::X * (r().x - 0.5) * 2.0 } else { r() * 3.0 - DVec3::ONE };
-            prop_assert_eq!(index.segment_hits(a, b), brute(a, b));
+            let all = brute(a, b);
+            prop_assert_eq!(index.segment_hits(a, b), !all.is_empty());
+            prop_assert_eq!(index.segment_crossings(a, b), all);
         }
         // Hits too: a segment through each triangle's centroid along its normal crosses it.
         for f in 0..mesh.faces.len() {

@@ -1,9 +1,9 @@
 //! Cavities joined to the surface beyond them by a tube: the opening of last resort, for a
 //! cavity the re-solve with points kept outside ([`crate::cavity_openings`]) closes again.
 
+use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
-use rfta_geom::{TriMesh, kernels};
-use rfta_mesh::{face_components, join, signed_volume};
+use rfta_mesh::{MeshIndex, face_components, join, signed_volume};
 
 /// Joins cavities of the closed, outward-oriented `mesh` to the surface beyond them, one tube per
 /// cavity: along the first segment of `paths` (each from an outside sample in a cavity to an
@@ -28,24 +28,18 @@ pub fn tunnel_cavities(mesh: &mut TriMesh, paths: &[[DVec3; 2]]) -> usize {
     let mut used = vec![false; components.len()];
     let mut replaced = vec![false; mesh.faces.len()];
     let mut joined = 0;
+    let Ok(index) = MeshIndex::new(mesh) else {
+        return 0;
+    };
     for &[from, to] in paths {
-        let mut hits: Vec<(f64, usize)> = Vec::new();
-        for f in 0..mesh.faces.len() {
-            let [a, b, c] = mesh.triangle(f);
-            if let Some(t) = kernels::segment_triangle(from, to, a, b, c) {
-                hits.push((t, f));
-                if hits.len() > 2 {
-                    break;
-                }
-            }
-        }
+        // Crossings of the mesh as it was: the index is not rebuilt after a join, whose tube
+        // replaces two faces (marked below) and appends four (beyond `component`).
+        let hits = index.segment_crossings(from, to);
         if hits.len() != 2 {
             continue;
         }
-        hits.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let (near, far) = (hits[0].1, hits[1].1);
-        // The tube's appended faces belong to no component of the mesh before.
-        if near >= component.len() || far >= component.len() || replaced[near] || replaced[far] {
+        let (near, far) = (hits[0].1 as usize, hits[1].1 as usize);
+        if replaced[near] || replaced[far] {
             continue;
         }
         let (cn, cf) = (component[near], component[far]);
