@@ -77,6 +77,7 @@ pub use report::{
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use rfta_feasible::TangentPoints;
 use rfta_geom::{SdfSamples, TriMesh};
 
 /// Errors of a reconstruction.
@@ -210,7 +211,7 @@ pub fn reconstruct_cancellable(
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
 ) -> Result<Reconstruction> {
-    reconstruct_settling(samples, params, progress, cancel, None)
+    reconstruct_settling(samples, params, progress, cancel, Ending::Full(None))
 }
 
 /// A last edit of the repaired mesh, in the samples' coordinates, before the verdict measures it
@@ -218,13 +219,24 @@ pub fn reconstruct_cancellable(
 pub(crate) type Settle<'a> =
     &'a mut (dyn FnMut(&mut TriMesh, &mut RepairReport) -> Result<()> + Send);
 
-/// [`reconstruct_cancellable`] with a [`Settle`] step.
+/// How a run ends after the fine-tuning rounds.
+pub(crate) enum Ending<'a> {
+    /// The final solve, the repair, the cavities opened, a [`Settle`] step if given, and the
+    /// verdict: the output a caller gets.
+    Full(Option<Settle<'a>>),
+    /// The final solve with the components the samples contradict removed, and nothing more:
+    /// an adaptive guide pass's mesh, which only says where to ask next (its report holds the
+    /// steps up to the rounds, its points are empty).
+    Guide,
+}
+
+/// [`reconstruct_cancellable`] ending as `ending` says.
 pub(crate) fn reconstruct_settling(
     samples: &SdfSamples,
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
-    settle: Option<Settle<'_>>,
+    ending: Ending<'_>,
 ) -> Result<Reconstruction> {
     params.validate()?;
     check_memory(samples.len(), params)?;
@@ -235,17 +247,26 @@ pub(crate) fn reconstruct_settling(
             ..params.clone()
         };
         // The settle step sees the samples' own coordinates.
-        let mut scaled_settle = settle.map(|f| {
-            move |mesh: &mut TriMesh, repair: &mut RepairReport| -> Result<()> {
-                mesh.map_vertices(|v| v / factor);
-                let r = f(mesh, repair);
-                mesh.map_vertices(|v| v * factor);
-                r
-            }
-        });
-        let settle = scaled_settle.as_mut().map(|f| f as Settle<'_>);
+        let (mut scaled_settle, guide) = match ending {
+            Ending::Full(settle) => (
+                settle.map(|f| {
+                    move |mesh: &mut TriMesh, repair: &mut RepairReport| -> Result<()> {
+                        mesh.map_vertices(|v| v / factor);
+                        let r = f(mesh, repair);
+                        mesh.map_vertices(|v| v * factor);
+                        r
+                    }
+                }),
+                false,
+            ),
+            Ending::Guide => (None, true),
+        };
+        let ending = match (guide, scaled_settle.as_mut()) {
+            (true, _) => Ending::Guide,
+            (false, settle) => Ending::Full(settle.map(|f| f as Settle<'_>)),
+        };
         let mut out = pool::on_pool(params.threads, || {
-            run(&scaled, &params, progress, cancel, settle)
+            run(&scaled, &params, progress, cancel, ending)
         })?;
         out.mesh.map_vertices(|v| v / factor);
         for p in &mut out.points.points {
@@ -256,7 +277,7 @@ pub(crate) fn reconstruct_settling(
         return Ok(out);
     }
     pool::on_pool(params.threads, || {
-        run(samples, params, progress, cancel, settle)
+        run(samples, params, progress, cancel, ending)
     })
 }
 
@@ -266,7 +287,7 @@ fn run(
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
-    settle: Option<Settle<'_>>,
+    ending: Ending<'_>,
 ) -> Result<Reconstruction> {
     let go_on = || {
         if cancel.load(Ordering::Relaxed) {
@@ -296,6 +317,23 @@ fn run(
     let mut rounds = rounds::Rounds::new(&unit, params, cloud);
     let rounds_report = rounds.run(&unit, params, &mut journal, progress, &go_on)?;
     go_on()?;
+    let settle = match ending {
+        Ending::Full(settle) => settle,
+        Ending::Guide => {
+            let mesh = finish::guide(&unit, params, rounds, &mut journal, progress)?;
+            return Ok(Reconstruction {
+                mesh,
+                points: TangentPoints::default(),
+                report: Report {
+                    input,
+                    initial,
+                    rounds: rounds_report,
+                    timings: journal.timings,
+                    ..Report::default()
+                },
+            });
+        }
+    };
     let mut finished = finish::finish(samples, &unit, params, rounds, &mut journal, progress)?;
     if let Some(settle) = settle {
         settle(&mut finished.mesh, &mut finished.repair)?;

@@ -78,6 +78,16 @@ fn a_torus_from_as_many_evaluations_as_a_grid_is_closer_than_the_grids() {
     assert!(r.mesh.watertight && r.mesh.components == 1, "{:?}", r.mesh);
     assert_eq!(rfta_mesh::Topology::of(mesh).genus(), Some(1));
     assert_eq!(r.consistency.sign_errors, 0);
+    // The final solve has two cells per finest spacing (FINAL_CELLS_PER_SPACING), where a
+    // grid's has four: on the box of side 2, a cell of 3.2 * 2 / 2^depth is at most half the
+    // spacing and more than a quarter of it.
+    let cell = 3.2 * 2.0 / f64::from(1u32 << r.rounds.spsr_depth);
+    assert!(
+        2.0 * cell <= report.finest_spacing && 4.0 * cell > report.finest_spacing,
+        "depth {} for the finest spacing {}",
+        r.rounds.spsr_depth,
+        report.finest_spacing
+    );
 
     let grid = Grid::cube(14, -1.0, 1.0).expect("grid");
     let values = (0..grid.len())

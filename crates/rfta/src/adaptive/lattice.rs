@@ -75,6 +75,8 @@ pub(crate) struct Lattice {
     origin: DVec3,
     /// Distance between neighbouring points of the finest lattice, per axis.
     step: DVec3,
+    /// The box's longest side.
+    extent: f64,
     /// Lattice points with a value, in the order they were asked for.
     keys: Vec<[u32; 3]>,
     values: Vec<f64>,
@@ -110,6 +112,7 @@ impl Lattice {
         Self {
             origin: bounds.min,
             step,
+            extent: extent.max_element(),
             keys: Vec::new(),
             values: Vec::new(),
             index: HashMap::new(),
@@ -141,6 +144,11 @@ impl Lattice {
     /// The diagonal of a cell.
     pub(crate) fn diagonal(&self, cell: Cell) -> f64 {
         (self.step * f64::from(cell.side())).length()
+    }
+
+    /// The box's longest side: the extent of every pass's samples.
+    pub(crate) fn extent(&self) -> f64 {
+        self.extent
     }
 
     /// The side of a base cell (its longest axis).

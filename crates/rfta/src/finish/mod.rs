@@ -214,20 +214,15 @@ fn tunnel(samples: &SdfSamples, grid: &rfta_geom::Grid, unit: &UnitBox, best: &m
     best.mesh = mesh;
 }
 
-/// Repair: components the samples contradict or do not witness removed, the handles narrower
-/// than the solve's finest cells (`cell`, input coordinates) cut, samples near the surface on the
-/// wrong side dented past, vertices inside near sample spheres pushed out and
-/// every sphere up to [`CLEAR_BELOW`] owner radii cleared, dents again, a known genus reached,
-/// the cavities counted.
-fn repair(
-    samples: &SdfSamples,
+/// The components the samples contradict or do not witness removed (`rfta_repair::remove_islands`
+/// with the verdicts of `islands.rs`): the mesh left, and how many were removed as small islands
+/// and as unsupported.
+fn components(
     unit: &UnitBox,
     params: &Params,
-    mut mesh: TriMesh,
-    cell: f64,
+    mesh: TriMesh,
     journal: &mut Journal,
-) -> (TriMesh, RepairReport) {
-    let mut report = RepairReport::default();
+) -> (TriMesh, [usize; 2]) {
     crate::pool::waiters_back();
     let t = Instant::now();
     // The largest component in the unit box and the whole mesh, indexed on first use.
@@ -246,12 +241,47 @@ fn repair(
             judge(unit, params, main.as_ref(), &mesh, faces, bounds)
         },
     );
-    // The two indices are as large as the mesh: gone before the clearing indexes it again.
-    drop((main, whole));
-    mesh = kept;
-    report.islands_removed = removed[Island::Small as usize];
-    report.unsupported_removed = removed[Island::Unsupported as usize];
     journal.timed(Step::Components, t);
+    (
+        kept,
+        [
+            removed[Island::Small as usize],
+            removed[Island::Unsupported as usize],
+        ],
+    )
+}
+
+/// An adaptive guide pass's ending ([`crate::Ending::Guide`]): the final solve on the rounds'
+/// points with the components the samples contradict removed; no sphere cleared, no cavity
+/// opened, no verdict. Its mesh only says where the next samples are asked for.
+pub(crate) fn guide(
+    unit: &UnitBox,
+    params: &Params,
+    rounds: Rounds,
+    journal: &mut Journal,
+    progress: &mut (dyn FnMut(Stage) + Send),
+) -> Result<TriMesh> {
+    progress(Stage::Final);
+    let (mesh, _) = final_solve(unit, params, &rounds.cloud, &[], journal)?;
+    Ok(components(unit, params, mesh, journal).0)
+}
+
+/// Repair: components the samples contradict or do not witness removed, the handles narrower
+/// than the solve's finest cells (`cell`, input coordinates) cut, samples near the surface on the
+/// wrong side dented past, vertices inside near sample spheres pushed out and
+/// every sphere up to [`CLEAR_BELOW`] owner radii cleared, dents again, a known genus reached,
+/// the cavities counted.
+fn repair(
+    samples: &SdfSamples,
+    unit: &UnitBox,
+    params: &Params,
+    mut mesh: TriMesh,
+    cell: f64,
+    journal: &mut Journal,
+) -> (TriMesh, RepairReport) {
+    let mut report = RepairReport::default();
+    (mesh, [report.islands_removed, report.unsupported_removed]) =
+        components(unit, params, mesh, journal);
     // Before the clearing, which then clears what the caps enter.
     let t = Instant::now();
     report.sub_cell_handles_cut = cut_sub_cell_handles(

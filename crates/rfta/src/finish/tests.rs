@@ -270,3 +270,39 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
         Some(Island::Unsupported)
     );
 }
+
+/// A guide pass's ending ([`crate::Ending::Guide`]) on the ball: one closed piece within a
+/// tenth of a spacing (0.1) of the sphere on average, from the final solve alone: no points
+/// handed back, no repair, no verdict, and no time in the steps after the components.
+#[test]
+fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
+    let samples = ball_grid();
+    let params = Params {
+        rounds: 2,
+        ..Params::default()
+    };
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let out =
+        crate::reconstruct_settling(&samples, &params, &mut |_| {}, &never, crate::Ending::Guide)
+            .expect("guide");
+    let topology = rfta_mesh::Topology::of(&out.mesh);
+    assert!(topology.is_watertight());
+    assert_eq!(rfta_mesh::face_components(&out.mesh).len(), 1);
+    let mean = out
+        .mesh
+        .vertices
+        .iter()
+        .map(|v| (v.length() - 0.5).abs())
+        .sum::<f64>()
+        / out.mesh.vertices.len() as f64;
+    assert!(mean < 0.01, "{mean}");
+    assert!(out.points.points.is_empty());
+    assert_eq!(out.report.repair, RepairReport::default());
+    assert_eq!(out.report.consistency, Consistency::default());
+    let steps: Vec<Step> = out.report.timings.iter().map(|&(s, _)| s).collect();
+    assert!(steps.contains(&Step::FinalSolve), "{steps:?}");
+    assert!(steps.contains(&Step::Components), "{steps:?}");
+    for step in [Step::SpheresCleared, Step::Consistency] {
+        assert!(!steps.contains(&step), "{step:?} in {steps:?}");
+    }
+}
