@@ -247,23 +247,22 @@ pub(crate) fn reconstruct_settling(
             ..params.clone()
         };
         // The settle step sees the samples' own coordinates.
-        let (mut scaled_settle, guide) = match ending {
-            Ending::Full(settle) => (
-                settle.map(|f| {
-                    move |mesh: &mut TriMesh, repair: &mut RepairReport| -> Result<()> {
-                        mesh.map_vertices(|v| v / factor);
-                        let r = f(mesh, repair);
-                        mesh.map_vertices(|v| v * factor);
-                        r
-                    }
-                }),
-                false,
+        let guide = matches!(ending, Ending::Guide);
+        let mut scaled_settle = match ending {
+            Ending::Full(Some(f)) => Some(
+                move |mesh: &mut TriMesh, repair: &mut RepairReport| -> Result<()> {
+                    mesh.map_vertices(|v| v / factor);
+                    let r = f(mesh, repair);
+                    mesh.map_vertices(|v| v * factor);
+                    r
+                },
             ),
-            Ending::Guide => (None, true),
+            _ => None,
         };
-        let ending = match (guide, scaled_settle.as_mut()) {
-            (true, _) => Ending::Guide,
-            (false, settle) => Ending::Full(settle.map(|f| f as Settle<'_>)),
+        let ending = if guide {
+            Ending::Guide
+        } else {
+            Ending::Full(scaled_settle.as_mut().map(|f| f as Settle<'_>))
         };
         let mut out = pool::on_pool(params.threads, || {
             run(&scaled, &params, progress, cancel, ending)
