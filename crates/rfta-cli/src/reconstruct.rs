@@ -267,8 +267,8 @@ pub(crate) fn run_pipeline(
 pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     let r = &out.report;
     ui.detail(format!(
-        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points; screened Poisson depth {} ({} in the rounds); points per round {:?}; {} spheres without a point, {} far spheres (constraints only)",
-        r.input.samples, r.initial.negative, r.initial.raster_resolution, r.initial.empty_space_points, r.initial.feasible_initial, r.rounds.spsr_depth, r.rounds.round_spsr_depth, r.rounds.points_per_round, r.final_solve.spheres_without_point, r.final_solve.far_spheres
+        "{} samples ({} negative), raster {}^3, {} empty-space points, {} feasible initial points ({} kept from the pass before); screened Poisson depth {} ({} in the rounds); points per round {:?}; {} spheres without a point, {} far spheres (constraints only)",
+        r.input.samples, r.initial.negative, r.initial.raster_resolution, r.initial.empty_space_points, r.initial.feasible_initial, r.initial.seeded, r.rounds.spsr_depth, r.rounds.round_spsr_depth, r.rounds.points_per_round, r.final_solve.spheres_without_point, r.final_solve.far_spheres
     ));
     for (stage, t) in &r.timings {
         ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));

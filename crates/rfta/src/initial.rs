@@ -23,17 +23,58 @@ const GRADIENT_FLOOR: usize = 100;
 pub(crate) fn initial_points(
     unit: &UnitBox,
     params: &Params,
+    seeds: Option<&TangentPoints>,
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<(TangentPoints, InitialReport)> {
+    let seeds = seeds.map(|s| feasible_seeds(unit, params, s));
     // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
-    drawing(unit, params, unit.raster_radius(params), journal, progress)
+    drawing(
+        unit,
+        params,
+        seeds,
+        unit.raster_radius(params),
+        journal,
+        progress,
+    )
+}
+
+/// The seeds (in the input's coordinates) that can start this run, in the unit box: those whose
+/// owner is a sample here and that no other sphere holds (an earlier run's points, before the
+/// samples added since).
+fn feasible_seeds(unit: &UnitBox, params: &Params, seeds: &TangentPoints) -> TangentPoints {
+    use rayon::prelude::*;
+    let seeds = unit.points_to_unit(seeds);
+    let all = SphereTree::new(&unit.spheres);
+    let keep: Vec<bool> = (0..seeds.len())
+        .into_par_iter()
+        .map(|k| {
+            let owner = seeds.owners[k];
+            (owner as usize) < unit.len()
+                && !all.inside_any(seeds.points[k], -params.tolerance, Some(owner))
+        })
+        .collect();
+    let kept = |v: &[DVec3]| -> Vec<DVec3> {
+        v.iter().zip(&keep).filter(|e| *e.1).map(|e| *e.0).collect()
+    };
+    TangentPoints {
+        points: kept(&seeds.points),
+        normals: kept(&seeds.normals),
+        owners: seeds
+            .owners
+            .iter()
+            .zip(&keep)
+            .filter(|e| *e.1)
+            .map(|e| *e.0)
+            .collect(),
+    }
 }
 
 /// [`initial_points`] rasterizing the spheres smaller than `reach`.
 fn drawing(
     unit: &UnitBox,
     params: &Params,
+    seeds: Option<TangentPoints>,
     reach: f64,
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
@@ -61,11 +102,22 @@ fn drawing(
         .collect();
     report.negative = neg.len();
     report.non_negative = pos.len();
-    let mut parts = Vec::new();
+    // Spheres with a seed keep it; the others get points of their own.
+    let mut seeded = vec![false; n];
+    for &o in seeds.iter().flat_map(|s| &s.owners) {
+        seeded[o as usize] = true;
+    }
+    report.seeded = seeds.as_ref().map_or(0, TangentPoints::len);
+    let mut parts: Vec<TangentPoints> = seeds.into_iter().collect();
     let mut raster_time = std::time::Duration::ZERO;
     let drawn = |i: usize| unit.spheres[i].radius < reach;
     for (negative, set) in [(false, &pos), (true, &neg)] {
-        if set.is_empty() {
+        let unseeded: Vec<u32> = set
+            .iter()
+            .copied()
+            .filter(|&i| !seeded[i as usize])
+            .collect();
+        if unseeded.is_empty() {
             continue;
         }
         let draw: Vec<usize> = set
@@ -124,11 +176,11 @@ fn drawing(
         );
         let tree = SphereTree::with_indices(&unit.spheres, &batch);
         crate::pool::waiters_back();
-        parts.push(counted(set.len(), progress, |done| {
+        parts.push(counted(unseeded.len(), progress, |done| {
             rfta_feasible::initial_points(
                 &unit.spheres,
                 values,
-                set,
+                &unseeded,
                 &empty_points,
                 &tree,
                 &fparams,
@@ -223,9 +275,16 @@ mod tests {
         let undrawn = unit.spheres.iter().filter(|s| s.radius >= reach).count();
         assert!(undrawn * 4 > unit.len(), "{undrawn} of {}", unit.len());
         let run = |reach: f64| {
-            drawing(&unit, &params, reach, &mut Journal::default(), &mut |_| {})
-                .expect("points")
-                .0
+            drawing(
+                &unit,
+                &params,
+                None,
+                reach,
+                &mut Journal::default(),
+                &mut |_| {},
+            )
+            .expect("points")
+            .0
         };
         let all = run(f64::INFINITY);
         let near = run(reach);
@@ -263,5 +322,57 @@ mod tests {
                 .gradient_points(&near, |_| true)
                 .is_none()
         );
+    }
+
+    /// Seeds that are the run's own initial points (in the input's coordinates) come back as
+    /// they are: each feasible, each sphere with one getting no other. A seed moved into another
+    /// sphere is dropped and its sphere gets the point it gets without seeds; a seed whose owner
+    /// is not a sample is dropped.
+    #[test]
+    fn seeds_are_kept_where_feasible_and_only_the_rest_get_points() {
+        let samples = SdfSamples::grid(Grid::cube(20, -1.0, 1.0).expect("grid"), {
+            let grid = Grid::cube(20, -1.0, 1.0).expect("grid");
+            (0..grid.len())
+                .map(|i| TORUS.sdf(grid.position(i)))
+                .collect()
+        })
+        .expect("samples");
+        let params = Params {
+            initial: crate::InitialPoints::Raster,
+            ..Params::default()
+        };
+        let unit = UnitBox::new(&samples, None, None);
+        let run = |seeds: Option<&TangentPoints>| {
+            initial_points(&unit, &params, seeds, &mut Journal::default(), &mut |_| {})
+                .expect("points")
+        };
+        let (own, report) = run(None);
+        assert!(own.len() > 300, "{}", own.len());
+        assert_eq!(report.seeded, 0);
+        let seeds = unit.points_to_input(own.clone());
+        let (again, report) = run(Some(&seeds));
+        assert_eq!(report.seeded, own.len());
+        assert_eq!(again.owners, own.owners);
+        for (a, b) in again.points.iter().zip(&own.points) {
+            assert!((*a - *b).length() < 1e-12, "{a} {b}");
+        }
+        // The first seed moved to the centre of the largest sphere (inside it), and a seed
+        // whose owner is past the samples.
+        let k = 0;
+        let other = (0..unit.len())
+            .max_by(|&a, &b| unit.spheres[a].radius.total_cmp(&unit.spheres[b].radius))
+            .expect("samples");
+        assert!(unit.spheres[other].radius > 0.1);
+        let mut bad = seeds.clone();
+        bad.points[k] = unit.to_input(unit.spheres[other].center);
+        bad.owners.push(unit.len() as u32);
+        bad.points.push(seeds.points[1]);
+        bad.normals.push(seeds.normals[1]);
+        let (mended, report) = run(Some(&bad));
+        assert_eq!(report.seeded, own.len() - 1);
+        assert_eq!(mended.owners, own.owners);
+        for (a, b) in mended.points.iter().zip(&own.points) {
+            assert!((*a - *b).length() < 1e-12, "{a} {b}");
+        }
     }
 }

@@ -211,7 +211,7 @@ pub fn reconstruct_cancellable(
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
 ) -> Result<Reconstruction> {
-    reconstruct_settling(samples, params, progress, cancel, Ending::Full(None))
+    reconstruct_settling(samples, params, None, progress, cancel, Ending::Full(None))
 }
 
 /// A last edit of the repaired mesh, in the samples' coordinates, before the verdict measures it
@@ -226,14 +226,19 @@ pub(crate) enum Ending<'a> {
     Full(Option<Settle<'a>>),
     /// The final solve with the components the samples contradict removed, and nothing more:
     /// an adaptive guide pass's mesh, which only says where to ask next (its report holds the
-    /// steps up to the rounds, its points are empty).
+    /// steps up to the rounds; its points are the rounds' last, which the next pass starts
+    /// from).
     Guide,
 }
 
-/// [`reconstruct_cancellable`] ending as `ending` says.
+/// [`reconstruct_cancellable`] ending as `ending` says, starting from `seeds` where given:
+/// tangency points of an earlier run on a prefix of these samples (owners are sample indices,
+/// positions in the samples' coordinates), kept where still feasible; only the spheres left
+/// without one get initial points of their own.
 pub(crate) fn reconstruct_settling(
     samples: &SdfSamples,
     params: &Params,
+    seeds: Option<&TangentPoints>,
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
     ending: Ending<'_>,
@@ -264,8 +269,12 @@ pub(crate) fn reconstruct_settling(
         } else {
             Ending::Full(scaled_settle.as_mut().map(|f| f as Settle<'_>))
         };
+        let seeds = seeds.map(|s| TangentPoints {
+            points: s.points.iter().map(|&p| p * factor).collect(),
+            ..s.clone()
+        });
         let mut out = pool::on_pool(params.threads, || {
-            run(&scaled, &params, progress, cancel, ending)
+            run(&scaled, &params, seeds.as_ref(), progress, cancel, ending)
         })?;
         out.mesh.map_vertices(|v| v / factor);
         for p in &mut out.points.points {
@@ -276,7 +285,7 @@ pub(crate) fn reconstruct_settling(
         return Ok(out);
     }
     pool::on_pool(params.threads, || {
-        run(samples, params, progress, cancel, ending)
+        run(samples, params, seeds, progress, cancel, ending)
     })
 }
 
@@ -284,6 +293,7 @@ pub(crate) fn reconstruct_settling(
 fn run(
     samples: &SdfSamples,
     params: &Params,
+    seeds: Option<&TangentPoints>,
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
     ending: Ending<'_>,
@@ -312,17 +322,17 @@ fn run(
     };
     go_on()?;
     let unit = normalize::UnitBox::new(samples, input.clamp, input.radius_scale);
-    let (cloud, initial) = initial::initial_points(&unit, params, &mut journal, progress)?;
+    let (cloud, initial) = initial::initial_points(&unit, params, seeds, &mut journal, progress)?;
     let mut rounds = rounds::Rounds::new(&unit, params, cloud);
     let rounds_report = rounds.run(&unit, params, &mut journal, progress, &go_on)?;
     go_on()?;
     let settle = match ending {
         Ending::Full(settle) => settle,
         Ending::Guide => {
-            let mesh = finish::guide(&unit, params, rounds, &mut journal, progress)?;
+            let (mesh, points) = finish::guide(&unit, params, rounds, &mut journal, progress)?;
             return Ok(Reconstruction {
                 mesh,
-                points: TangentPoints::default(),
+                points,
                 report: Report {
                     input,
                     initial,

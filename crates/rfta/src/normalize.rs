@@ -1,5 +1,6 @@
 //! Step 1: the samples as spheres in the reference's unit box.
 
+use rfta_feasible::TangentPoints;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Grid, SdfSamples, Sphere};
 
@@ -124,6 +125,23 @@ impl UnitBox {
     /// A point of the samples' coordinates in the unit box.
     pub(crate) fn to_unit(&self, p: DVec3) -> DVec3 {
         self.frame().to_frame(p)
+    }
+
+    /// Tangency points in the unit box moved to the input's coordinates (normals and owners as
+    /// they are: the map is a scale and a shift).
+    pub(crate) fn points_to_input(&self, cloud: TangentPoints) -> TangentPoints {
+        TangentPoints {
+            points: cloud.points.iter().map(|&p| self.to_input(p)).collect(),
+            ..cloud
+        }
+    }
+
+    /// Tangency points in the input's coordinates moved to the unit box.
+    pub(crate) fn points_to_unit(&self, cloud: &TangentPoints) -> TangentPoints {
+        TangentPoints {
+            points: cloud.points.iter().map(|&p| self.to_unit(p)).collect(),
+            ..cloud.clone()
+        }
     }
 
     /// A unit-box length in the samples' coordinates.

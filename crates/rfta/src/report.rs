@@ -187,6 +187,9 @@ pub struct InitialReport {
     pub empty_space_points: usize,
     /// Spheres with a feasible initial tangency point.
     pub feasible_initial: usize,
+    /// Of the initial points, those kept from an earlier pass (an adaptive run's pass before;
+    /// 0 otherwise).
+    pub seeded: usize,
 }
 
 /// What the screened Poisson solves and fine-tuning rounds did (steps 4 and 5).
@@ -399,9 +402,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 5 + 4 + 4 + 14 fields, the mesh check's 6, the consistency check's 6
+        // The stages' 4 + 6 + 4 + 4 + 14 fields, the mesh check's 6, the consistency check's 6
         // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 5 + 4 + 4 + 14 + 6 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 6 + 4 + 4 + 14 + 6 + 6 + 2, "{text}");
     }
 
     #[test]

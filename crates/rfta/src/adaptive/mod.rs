@@ -15,7 +15,9 @@
 //!    points; cells whose probe finds the mesh right are left coarse;
 //! 4. reconstruct and repeat, each pass spending about as many evaluations as all before it
 //!    (the passes' reconstructions cost about twice the last one), until the budget is spent or no
-//!    probed cell is off by more than [`Budget::tolerance`].
+//!    probed cell is off by more than [`Budget::tolerance`]. Each pass starts from the tangency
+//!    points the pass before ended with, those no new sample's sphere holds; only the spheres
+//!    left without one get initial points of their own.
 //!
 //! The passes before the last only say where to ask: they reconstruct with at most
 //! [`GUIDE_ROUNDS`] fine-tuning rounds and end at the final solve with the components the
@@ -189,6 +191,8 @@ pub fn reconstruct_adaptive(
         .evaluations
         .saturating_sub(reserve)
         .max(lattice.len());
+    // Each pass starts from the tangency points the one before ended with.
+    let mut seeds: Option<rfta_feasible::TangentPoints> = None;
     loop {
         // A pass spends about what all before it did: the reconstructions cost about twice the
         // last one's, and the error halves where it matters at each pass.
@@ -199,12 +203,21 @@ pub fn reconstruct_adaptive(
         }
         if spend < MIN_BUDGET / 5 {
             let left = budget.evaluations - lattice.len();
-            return final_pass(lattice, &mut asker, left, params, report, progress, on_pass);
+            return final_pass(
+                lattice, &mut asker, left, params, seeds, report, progress, on_pass,
+            );
         }
         let t = Instant::now();
         let oracle_before = asker.seconds;
         let samples = lattice.samples()?;
-        let rec = crate::reconstruct_settling(&samples, &guide, progress, cancel, Ending::Guide)?;
+        let rec = crate::reconstruct_settling(
+            &samples,
+            &guide,
+            seeds.as_ref(),
+            progress,
+            cancel,
+            Ending::Guide,
+        )?;
         let mut pass = Pass {
             samples: samples.len(),
             ..Pass::default()
@@ -218,8 +231,11 @@ pub fn reconstruct_adaptive(
         if done {
             // Nothing left undecided, or nothing left to refine.
             let left = budget.evaluations - lattice.len();
-            return final_pass(lattice, &mut asker, left, params, report, progress, on_pass);
+            return final_pass(
+                lattice, &mut asker, left, params, seeds, report, progress, on_pass,
+            );
         }
+        seeds = Some(rec.points);
     }
 }
 
@@ -232,11 +248,13 @@ const CUT_GAP: f64 = 0.05;
 
 /// The last pass: the caller's parameters on every sample, the small components and thin handles
 /// settled by asking the function at most `left` times (`settle.rs`).
+#[allow(clippy::too_many_arguments)]
 fn final_pass(
     lattice: Lattice,
     asker: &mut Asker<'_>,
     left: usize,
     params: &Params,
+    seeds: Option<rfta_feasible::TangentPoints>,
     mut report: AdaptiveReport,
     progress: &mut (dyn FnMut(Stage) + Send),
     on_pass: &mut dyn FnMut(&Pass),
@@ -268,6 +286,7 @@ fn final_pass(
     let rec = crate::reconstruct_settling(
         &samples,
         &params,
+        seeds.as_ref(),
         progress,
         cancel,
         Ending::Full(Some(&mut settle)),

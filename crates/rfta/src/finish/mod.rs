@@ -67,14 +67,9 @@ pub(crate) fn finish(
         }
         journal.timed(Step::Cavities, t);
     }
-    let points = TangentPoints {
-        points: cloud.points.iter().map(|&p| unit.to_input(p)).collect(),
-        normals: cloud.normals,
-        owners: cloud.owners,
-    };
     Ok(Finished {
         mesh,
-        points,
+        points: unit.points_to_input(cloud),
         final_solve,
         repair,
     })
@@ -253,17 +248,19 @@ fn components(
 
 /// An adaptive guide pass's ending ([`crate::Ending::Guide`]): the final solve on the rounds'
 /// points with the components the samples contradict removed; no sphere cleared, no cavity
-/// opened, no verdict. Its mesh only says where the next samples are asked for.
+/// opened, no verdict. Its mesh only says where the next samples are asked for; its points (in
+/// the input's coordinates) are where the next pass starts.
 pub(crate) fn guide(
     unit: &UnitBox,
     params: &Params,
     rounds: Rounds,
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
-) -> Result<TriMesh> {
+) -> Result<(TriMesh, TangentPoints)> {
     progress(Stage::Final);
     let (mesh, _) = final_solve(unit, params, &rounds.cloud, &[], journal)?;
-    Ok(components(unit, params, mesh, journal).0)
+    let mesh = components(unit, params, mesh, journal).0;
+    Ok((mesh, unit.points_to_input(rounds.cloud)))
 }
 
 /// Repair: components the samples contradict or do not witness removed, the handles narrower

@@ -272,8 +272,10 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
 }
 
 /// A guide pass's ending ([`crate::Ending::Guide`]) on the ball: one closed piece within a
-/// tenth of a spacing (0.1) of the sphere on average, from the final solve alone: no points
-/// handed back, no repair, no verdict, and no time in the steps after the components.
+/// tenth of a spacing (0.1) of the sphere on average, from the final solve alone: no repair, no
+/// verdict, and no time in the steps after the components. Its points (the rounds' last, in the
+/// samples' coordinates) lie on their owners' spheres, and a run seeded with them on the same
+/// samples keeps every one.
 #[test]
 fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
     let samples = ball_grid();
@@ -282,9 +284,15 @@ fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
         ..Params::default()
     };
     let never = std::sync::atomic::AtomicBool::new(false);
-    let out =
-        crate::reconstruct_settling(&samples, &params, &mut |_| {}, &never, crate::Ending::Guide)
-            .expect("guide");
+    let out = crate::reconstruct_settling(
+        &samples,
+        &params,
+        None,
+        &mut |_| {},
+        &never,
+        crate::Ending::Guide,
+    )
+    .expect("guide");
     let topology = rfta_mesh::Topology::of(&out.mesh);
     assert!(topology.is_watertight());
     assert_eq!(rfta_mesh::face_components(&out.mesh).len(), 1);
@@ -296,7 +304,23 @@ fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
         .sum::<f64>()
         / out.mesh.vertices.len() as f64;
     assert!(mean < 0.01, "{mean}");
-    assert!(out.points.points.is_empty());
+    assert!(out.points.len() > 100, "{}", out.points.len());
+    let positions = samples.positions();
+    for (p, &o) in out.points.points.iter().zip(&out.points.owners) {
+        let o = o as usize;
+        let off = (*p - positions[o]).length() - samples.values()[o].abs();
+        assert!(off.abs() < 1e-9, "{off}");
+    }
+    let seeded = crate::reconstruct_settling(
+        &samples,
+        &params,
+        Some(&out.points),
+        &mut |_| {},
+        &never,
+        crate::Ending::Guide,
+    )
+    .expect("seeded");
+    assert_eq!(seeded.report.initial.seeded, out.points.len());
     assert_eq!(out.report.repair, RepairReport::default());
     assert_eq!(out.report.consistency, Consistency::default());
     let steps: Vec<Step> = out.report.timings.iter().map(|&(s, _)| s).collect();
