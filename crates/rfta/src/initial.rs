@@ -40,33 +40,30 @@ pub(crate) fn initial_points(
 }
 
 /// The seeds (in the input's coordinates) that can start this run, in the unit box: those whose
-/// owner is a sample here and that no other sphere holds (an earlier run's points, before the
-/// samples added since).
+/// owner is a sample here and that no other sphere holds by more than the feasibility tolerance
+/// (an earlier run's points, before the samples added since).
 fn feasible_seeds(unit: &UnitBox, params: &Params, seeds: &TangentPoints) -> TangentPoints {
     use rayon::prelude::*;
-    let seeds = unit.points_to_unit(seeds);
     let all = SphereTree::new(&unit.spheres);
-    let keep: Vec<bool> = (0..seeds.len())
+    let kept: Vec<usize> = (0..seeds.len())
         .into_par_iter()
-        .map(|k| {
+        .filter(|&k| {
             let owner = seeds.owners[k];
             (owner as usize) < unit.len()
-                && !all.inside_any(seeds.points[k], -params.tolerance, Some(owner))
+                && !all.inside_any(
+                    unit.to_unit(seeds.points[k]),
+                    -params.tolerance,
+                    Some(owner),
+                )
         })
         .collect();
-    let kept = |v: &[DVec3]| -> Vec<DVec3> {
-        v.iter().zip(&keep).filter(|e| *e.1).map(|e| *e.0).collect()
-    };
     TangentPoints {
-        points: kept(&seeds.points),
-        normals: kept(&seeds.normals),
-        owners: seeds
-            .owners
+        points: kept
             .iter()
-            .zip(&keep)
-            .filter(|e| *e.1)
-            .map(|e| *e.0)
+            .map(|&k| unit.to_unit(seeds.points[k]))
             .collect(),
+        normals: kept.iter().map(|&k| seeds.normals[k]).collect(),
+        owners: kept.iter().map(|&k| seeds.owners[k]).collect(),
     }
 }
 
@@ -102,21 +99,29 @@ fn drawing(
         .collect();
     report.negative = neg.len();
     report.non_negative = pos.len();
-    // Spheres with a seed keep it; the others get points of their own.
-    let mut seeded = vec![false; n];
-    for &o in seeds.iter().flat_map(|s| &s.owners) {
-        seeded[o as usize] = true;
-    }
+    // Spheres with a seed keep it; the others get points of their own (no copy of the sets
+    // without seeds: on a 513^3 grid they are 135 million indices).
+    let seeded: Option<Vec<bool>> = seeds.as_ref().map(|s| {
+        let mut seeded = vec![false; n];
+        for &o in &s.owners {
+            seeded[o as usize] = true;
+        }
+        seeded
+    });
     report.seeded = seeds.as_ref().map_or(0, TangentPoints::len);
     let mut parts: Vec<TangentPoints> = seeds.into_iter().collect();
     let mut raster_time = std::time::Duration::ZERO;
     let drawn = |i: usize| unit.spheres[i].radius < reach;
     for (negative, set) in [(false, &pos), (true, &neg)] {
-        let unseeded: Vec<u32> = set
-            .iter()
-            .copied()
-            .filter(|&i| !seeded[i as usize])
-            .collect();
+        let unseeded: std::borrow::Cow<[u32]> = match &seeded {
+            None => set.as_slice().into(),
+            Some(seeded) => set
+                .iter()
+                .copied()
+                .filter(|&i| !seeded[i as usize])
+                .collect::<Vec<u32>>()
+                .into(),
+        };
         if unseeded.is_empty() {
             continue;
         }

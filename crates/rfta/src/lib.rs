@@ -271,7 +271,8 @@ pub(crate) fn reconstruct_settling(
         };
         let seeds = seeds.map(|s| TangentPoints {
             points: s.points.iter().map(|&p| p * factor).collect(),
-            ..s.clone()
+            normals: s.normals.clone(),
+            owners: s.owners.clone(),
         });
         let mut out = pool::on_pool(params.threads, || {
             run(&scaled, &params, seeds.as_ref(), progress, cancel, ending)

@@ -136,14 +136,6 @@ impl UnitBox {
         }
     }
 
-    /// Tangency points in the input's coordinates moved to the unit box.
-    pub(crate) fn points_to_unit(&self, cloud: &TangentPoints) -> TangentPoints {
-        TangentPoints {
-            points: cloud.points.iter().map(|&p| self.to_unit(p)).collect(),
-            ..cloud.clone()
-        }
-    }
-
     /// A unit-box length in the samples' coordinates.
     pub(crate) fn to_input_length(&self, length: f64) -> f64 {
         length * self.scale

@@ -185,7 +185,8 @@ pub struct InitialReport {
     pub raster_resolution: usize,
     /// Empty-space points sampled (both signs).
     pub empty_space_points: usize,
-    /// Spheres with a feasible initial tangency point.
+    /// Initial tangency points, all feasible: one per sphere that has one, or as many as a
+    /// seeded sphere's seeds (an adaptive pass's points carry the rounds' extra ones).
     pub feasible_initial: usize,
     /// Of the initial points, those kept from an earlier pass (an adaptive run's pass before;
     /// 0 otherwise).
