@@ -94,22 +94,22 @@ fn main() -> ExitCode {
     if let Some(bytes) = ui::available_memory() {
         rfta_io::set_read_limit(bytes / 4);
     }
-    // Threads beyond the cores only cost (starting 10,000 took 42 s; results never depend on
-    // the count): capped, with a warning.
-    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
-    if let Some(n) = cli.threads.filter(|&n| n > cores) {
-        ui.say(format!(
-            "warning: --threads {n} is more than the {cores} cores here; using {cores}"
-        ));
-        cli.threads = Some(cores);
-    }
-    if let Some(n) = cli.threads
-        && let Err(e) = rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build_global()
-    {
-        ui::note(&format!("error: cannot start {n} threads: {e}"));
-        return ExitCode::from(1);
+    // One cap for --threads and RAYON_NUM_THREADS: the cores here (threads beyond them only
+    // cost; results never depend on the count).
+    match rfta::start_global_pool(cli.threads) {
+        Ok(pool) => {
+            if let Some((n, from)) = pool.capped {
+                ui.say(format!(
+                    "warning: {from} {n} is more than the {} cores here; using {}",
+                    pool.threads, pool.threads
+                ));
+            }
+            cli.threads = Some(pool.threads);
+        }
+        Err(e) => {
+            ui::note(&format!("error: {e}"));
+            return ExitCode::from(1);
+        }
     }
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),

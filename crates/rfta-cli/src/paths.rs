@@ -1,6 +1,7 @@
 //! Every file a command reads or writes, checked together before any work starts: nothing it
 //! reads is written over, nothing is written twice, every output can be written (its folder
-//! exists and it is not a folder). Two paths name the same file when they reach the same inode
+//! exists and takes a new file; it is a regular file, a link to one, a FIFO or a character
+//! device, never a folder or a socket: [`rfta_io::check_writable`]). Two paths name the same file when they reach the same inode
 //! (links, `./x` and `x`, hard links) or, for a file not yet there, the same place.
 //!
 //! One place for every command: `reconstruct` (the input, its sidecar, `-o`, `--report`,
@@ -96,12 +97,14 @@ impl Files {
         self.add(role, path, Access::Read)
     }
 
-    /// An SDF file the command reads, and its sidecar (`NAME.json`) when there is one.
+    /// An SDF file the command reads, and the place of its sidecar (`NAME.json`), whether or
+    /// not one is there: an output written there would be read as the input's sidecar next
+    /// time, and the input could no longer be read (hostile test E6).
     pub(crate) fn read_sdf(&mut self, role: impl Into<String>, path: &Path) -> &mut Self {
         let role = role.into();
         let side = rfta_io::sidecar_path(path);
-        if side != path && side.is_file() {
-            self.add(format!("{role}'s sidecar"), &side, Access::Read);
+        if side != path {
+            self.add(format!("{role}'s sidecar (read for its bounds whenever it exists)"), &side, Access::Read);
         }
         self.add(role, path, Access::Read)
     }
@@ -121,10 +124,12 @@ impl Files {
     }
 
     /// Refuses, naming both, any file written that is also read or written again, and any output
-    /// that is a folder or whose folder is missing.
+    /// that cannot be written: a folder, a socket, a folder that is missing or takes no new file.
     pub(crate) fn check(&self) -> Result<()> {
         let mut seen: HashMap<Identity, &Entry> = HashMap::new();
         for e in &self.entries {
+            // A written path is known by what it leads to (a link by the file it names).
+            let mut path = e.path.clone();
             if e.access != Access::Read {
                 if e.path.is_dir() {
                     bail!(
@@ -145,8 +150,14 @@ impl Files {
                         folder.display()
                     );
                 }
+                // A folder batch creates is checked when it exists.
+                if folder.is_dir() {
+                    let target = rfta_io::check_writable(&e.path)
+                        .map_err(|err| anyhow::anyhow!("{} cannot be written: {err}", e.role))?;
+                    path = target.path().to_path_buf();
+                }
             }
-            match seen.entry(identity(&e.path)) {
+            match seen.entry(identity(&path)) {
                 std::collections::hash_map::Entry::Vacant(v) => {
                     v.insert(e);
                 }

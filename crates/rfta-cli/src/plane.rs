@@ -39,6 +39,9 @@ pub(crate) struct Extras<'a> {
     pub(crate) report: Option<&'a Path>,
     /// `--points`: the tangency points and normals, as PLY with `z = 0`.
     pub(crate) points: Option<&'a Path>,
+    /// `--html`: one page with the curve drawn over the samples (and marching squares beside it
+    /// on a grid), and the report's figures.
+    pub(crate) html: Option<&'a Path>,
 }
 
 /// `rfta reconstruct` on 2D samples: polylines to `output` (.obj, .svg, .csv).
@@ -119,6 +122,9 @@ pub(crate) fn reconstruct(
         json["watertight"] = out.curve.is_closed().into();
         crate::ui::write_json(path, &json)?;
     }
+    if let Some(path) = extras.html {
+        write_page(path, input, &samples, &out, ui)?;
+    }
     if let Some(path) = extras.points {
         let (p, n): (Vec<_>, Vec<_>) = out
             .points
@@ -133,6 +139,64 @@ pub(crate) fn reconstruct(
             path.display()
         ));
     }
+    Ok(())
+}
+
+/// `--html` for 2D input: the samples (blue inside), rfta's curve in red and, on a grid,
+/// marching squares dashed in blue, as an inline SVG, with the report's figures below it.
+fn write_page(
+    path: &Path,
+    input: &Path,
+    samples: &Samples2,
+    out: &rfta::plane::Reconstruction2,
+    ui: &Ui,
+) -> Result<()> {
+    let positions = samples.positions();
+    let ms = samples
+        .as_grid()
+        .map(|g| rfta_mc::marching_squares(g, samples.values(), 0.0));
+    let mut curves = vec![&out.curve];
+    curves.extend(ms.as_ref());
+    let mut svg = rfta_io::Svg::around(&curves, positions).samples(positions, samples.values());
+    if let Some(ms) = &ms {
+        svg = svg.curve(ms, "#1f618d", "6 4");
+    }
+    let svg = svg.curve(&out.curve, "#c0392b", "").finish();
+    let escape = |t: &str| {
+        t.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let mut rows = format!(
+        "<tr><td>loops</td><td>{}</td></tr><tr><td>vertices</td><td>{}</td></tr><tr><td>closed</td><td>{}</td></tr>",
+        out.curve.loops(),
+        out.curve.vertices.len(),
+        out.curve.is_closed()
+    );
+    if let Some(ms) = &ms {
+        rows += &format!(
+            "<tr><td>marching squares loops</td><td>{}</td></tr>",
+            ms.loops()
+        );
+    }
+    if let serde_json::Value::Object(m) = serde_json::to_value(&out.report)? {
+        for (k, v) in m {
+            rows += &format!(
+                "<tr><td>{}</td><td>{}</td></tr>",
+                escape(&k.replace('_', " ")),
+                escape(&v.to_string())
+            );
+        }
+    }
+    let title = escape(&format!("rfta reconstruct {}", input.display()));
+    let page = format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{title}</title>\
+         <style>body{{font-family:sans-serif;margin:1em}}td{{padding:0 1em 0 0}}</style></head>\
+         <body><h1>{title}</h1><p>Red: Reach for the Arcs; dashed blue: marching squares of the \
+         same grid; dots: the samples (blue inside).</p>\n{svg}<table>{rows}</table></body></html>\n"
+    );
+    rfta_io::write_atomic(path, |w| w.write_all(page.as_bytes()))?;
+    ui.say(format!("wrote {}", path.display()));
     Ok(())
 }
 

@@ -398,6 +398,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         let extras = crate::plane::Extras {
             report: args.report.as_deref(),
             points: args.points.as_deref(),
+            html: args.html.as_deref(),
         };
         return crate::plane::reconstruct(&input, &args.output, args.bounds, &params, extras, ui);
     }
@@ -410,7 +411,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     params.check = !args.checks.no_check;
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
     // Refuse an oversized grid from its header, before reading the data.
-    if let Some(n) = rfta_io::peek_sdf_len(&input)? {
+    if let Some(n) = rfta_io::peek_sdf_len(&input, args.grid.as_deref())? {
         rfta::check_memory(n, &params).with_context(|| {
             format!(
                 "{}: refused before reading (the limit is {})",

@@ -49,7 +49,7 @@ pub mod table;
 mod text;
 mod vdb;
 
-pub use atomic::{remove_temp_files, write_atomic};
+pub use atomic::{OutputTarget, check_writable, output_target, remove_temp_files, write_atomic};
 pub use error::{Error, Result};
 pub use npy::{NpyArray, parse_npy, write_npy_f64};
 pub use plane::{Svg, is_sdf_2d, read_polylines, read_sdf_2d, write_polylines, write_svg};
@@ -180,6 +180,12 @@ static READ_LIMIT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::
 /// A program sets it once, from the memory it may use.
 pub fn set_read_limit(bytes: u64) {
     READ_LIMIT.store(bytes, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The limit [`set_read_limit`] set: also the most bytes one input may take once decoded (an
+/// OpenVDB level set made dense).
+pub(crate) fn read_limit() -> u64 {
+    READ_LIMIT.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {

@@ -102,12 +102,13 @@ pub fn read_sdf(path: &Path, bounds: Option<GridBounds>) -> Result<RawSdf> {
 }
 
 /// The number of samples in an SDF file, read from its header without loading the data, for
-/// the grid formats (`.npy`, `.exr`); `None` for others. Lets a caller refuse an input too large
-/// for the machine before reading it.
+/// the grid formats (`.npy`, `.exr`; `.vdb` from the topology of the level set `grid`, or the
+/// first, without its values); `None` for others. Lets a caller refuse an input too large for
+/// the machine before reading it.
 ///
 /// # Errors
 /// [`Error::Io`] if the file cannot be read, [`Error::Parse`] for a malformed header.
-pub fn peek_sdf_len(path: &Path) -> Result<Option<usize>> {
+pub fn peek_sdf_len(path: &Path, grid: Option<&str>) -> Result<Option<usize>> {
     use std::io::Read;
     let io = |source| Error::Io {
         path: path.to_path_buf(),
@@ -139,8 +140,8 @@ pub fn peek_sdf_len(path: &Path) -> Result<Option<usize>> {
         }
         SdfFormat::Vdb => {
             let bytes = read_bytes(path)?;
-            let n = vdb::peek_len(&bytes, None).map_err(|e| e.at(path))?;
-            Ok(n.map(|n| usize::try_from(n).unwrap_or(usize::MAX)))
+            let n = vdb::peek_len(&bytes, grid).map_err(|e| e.at(path))?;
+            Ok(Some(usize::try_from(n).unwrap_or(usize::MAX)))
         }
         SdfFormat::Ply | SdfFormat::Text => Ok(None),
     }

@@ -652,6 +652,10 @@ fn read_sdf<'py>(
 
 #[pymodule]
 fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The global pool at most one thread per core, whatever RAYON_NUM_THREADS asks (rayon
+    // would start that many and panic where they cannot start). An error here (the threads
+    // refused) leaves rayon's own start, which reports it as it can.
+    let _ = rfta::start_global_pool(None);
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("NoSurfaceError", m.py().get_type::<NoSurfaceError>())?;
     m.add_function(wrap_pyfunction!(reconstruct, m)?)?;

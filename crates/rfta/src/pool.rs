@@ -48,6 +48,56 @@ thread_local! {
     static OWN: RefCell<Option<Arc<Waiters>>> = const { RefCell::new(None) };
 }
 
+/// How the process's global pool was started by [`start_global_pool`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GlobalPool {
+    /// Its threads.
+    pub threads: usize,
+    /// What was asked for and where, when it was more than the cores and so was capped:
+    /// `(count, "--threads")` or `(count, "RAYON_NUM_THREADS")`.
+    pub capped: Option<(usize, &'static str)>,
+}
+
+/// The cores here: the most threads a pool gets (threads beyond them only cost, results never
+/// depend on the count, and asking for 100,000 failed to start; hostile test E4).
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+}
+
+/// Starts rayon's global pool once for the process, with `asked` threads or else what
+/// `RAYON_NUM_THREADS` says (a positive number; anything else is rayon's default of one per
+/// core), at most [`cores`]: the one cap for every way of asking. A program calls it before any
+/// parallel work; rayon would otherwise start the pool itself from `RAYON_NUM_THREADS`
+/// uncapped, and panic where that many threads cannot start.
+///
+/// # Errors
+/// [`Error::ThreadPool`] when the threads cannot be started (the pool was started already, or
+/// the system refuses them).
+pub fn start_global_pool(asked: Option<usize>) -> Result<GlobalPool> {
+    let from_env = || {
+        std::env::var("RAYON_NUM_THREADS")
+            .ok()
+            .and_then(|v| v.trim().parse::<usize>().ok())
+            .filter(|&n| n > 0)
+            .map(|n| (n, "RAYON_NUM_THREADS"))
+    };
+    let asked = asked.map(|n| (n.max(1), "--threads")).or_else(from_env);
+    let cores = cores();
+    let (threads, capped) = match asked {
+        Some((n, from)) if n > cores => (cores, Some((n, from))),
+        Some((n, _)) => (n, None),
+        None => (cores, None),
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global()
+        .map_err(|e| Error::ThreadPool {
+            threads,
+            reason: e.to_string(),
+        })?;
+    Ok(GlobalPool { threads, capped })
+}
+
 /// Runs `work` on `threads` workers (`None`: on a worker of the global pool, where the caller
 /// is not on one already: each parallel loop then forks from inside the pool instead of being
 /// injected into it), the pool's other workers waiting actively for its parallel loops.

@@ -19,6 +19,16 @@ impl<'a> Bytes<'a> {
         self.at
     }
 
+    /// The bytes after the next one's offset.
+    pub(super) fn remaining(&self) -> usize {
+        self.data.len() - self.at
+    }
+
+    /// The file's length.
+    pub(super) fn len(&self) -> usize {
+        self.data.len()
+    }
+
     /// Moves to `offset` (from the start), which must lie within the file.
     pub(super) fn seek(&mut self, offset: u64, what: &str) -> ParseResult<()> {
         match usize::try_from(offset) {

@@ -83,21 +83,47 @@ impl Descriptor {
 struct GridHead {
     compression: u32,
     class: String,
-    bbox: Option<([i32; 3], [i32; 3])>,
 }
 
-/// Reads the level set named `grid`, or the first level set in the file.
-pub(crate) fn parse(bytes: &[u8], grid: Option<&str>) -> ParseResult<LevelSet> {
-    let mut b = Bytes::new(bytes);
-    let descriptors = read_header(&mut b)?;
-    let (d, head) = choose(&mut b, &descriptors, grid)?;
-    let xform = transform::read(&mut b)?;
+/// The grid chosen, its storage and transform, and its tree's topology (no values yet).
+struct Chosen<'d> {
+    descriptor: &'d Descriptor,
+    storage: Storage,
+    xform: transform::AxisAligned,
+    tree: Tree,
+    /// The dense box: its first voxel and voxels per axis.
+    lo: [i32; 3],
+    dims: [usize; 3],
+}
+
+/// Reads the file up to the topology of the level set named `grid` (or the first), and checks
+/// what making it dense would take before anything of that size is allocated: the box comes
+/// from the leaves and tiles themselves, not from metadata a file may omit or get wrong
+/// (hostile test E2), and the values from the leaves counted.
+fn topology<'d>(
+    b: &mut Bytes<'_>,
+    descriptors: &'d [Descriptor],
+    grid: Option<&str>,
+) -> ParseResult<Chosen<'d>> {
+    let (d, head) = choose(b, descriptors, grid)?;
+    let xform = transform::read(b)?;
     let storage = Storage {
         compression: head.compression,
         double: d.tree == "Tree_double_5_4_3",
         half: d.half,
     };
-    let tree = Tree::read(&mut b, storage)?;
+    let tree = Tree::read_topology(b, storage)?;
+    let bg = tree.background;
+    // A level set's background is the half width of its band, what inactive voxels outside
+    // hold: positive and finite. Anything else does not say where inside and outside are.
+    if !(bg.is_finite() && bg > 0.0) {
+        return Err(ParseError::new(format!(
+            "the grid {:?} has background value {bg}: a level set's background is the positive \
+             half width of its narrow band (what its inactive voxels outside hold), so this grid \
+             is not a signed distance level set",
+            d.short_name()
+        )));
+    }
     let (lo, hi) = tree.active_box().ok_or_else(|| {
         ParseError::new(format!(
             "the level set {:?} has no active voxels",
@@ -127,9 +153,50 @@ pub(crate) fn parse(bytes: &[u8], grid: Option<&str>) -> ParseResult<LevelSet> {
             dims[2]
         )));
     }
+    // What the values take: 512 per leaf as read, then the dense box; both in f64.
+    let limit = crate::read_limit();
+    let leaf_bytes = (tree.leaves.len() as u64).saturating_mul(512 * 8);
+    let dense_bytes = total.unwrap_or(u64::MAX).saturating_mul(8);
+    if leaf_bytes.saturating_add(dense_bytes) > limit {
+        return Err(ParseError::new(format!(
+            "the level set {:?} makes a dense box of {} x {} x {} voxels ({} bytes, with {} bytes \
+             of leaf values as read), more than the {limit} bytes this process may take for one \
+             input (a quarter of the memory it can use); crop the level set or free memory",
+            d.short_name(),
+            dims[0],
+            dims[1],
+            dims[2],
+            dense_bytes,
+            leaf_bytes
+        )));
+    }
+    Ok(Chosen {
+        descriptor: d,
+        storage,
+        xform,
+        tree,
+        lo,
+        dims,
+    })
+}
+
+/// Reads the level set named `grid`, or the first level set in the file.
+pub(crate) fn parse(bytes: &[u8], grid: Option<&str>) -> ParseResult<LevelSet> {
+    let mut b = Bytes::new(bytes);
+    let descriptors = read_header(&mut b)?;
+    let Chosen {
+        descriptor: d,
+        storage,
+        xform,
+        mut tree,
+        lo,
+        dims,
+    } = topology(&mut b, &descriptors, grid)?;
+    tree.read_values(&mut b, storage)?;
+    let head_compression = storage.compression;
     let codec = match (
-        head.compression & (tree::BLOSC | tree::ZIP),
-        head.compression & tree::ACTIVE_MASK,
+        head_compression & (tree::BLOSC | tree::ZIP),
+        head_compression & tree::ACTIVE_MASK,
     ) {
         (0, 0) => "uncompressed",
         (0, _) => "active-mask compressed",
@@ -171,20 +238,13 @@ pub(crate) fn parse(bytes: &[u8], grid: Option<&str>) -> ParseResult<LevelSet> {
     })
 }
 
-/// The number of voxels [`parse`] would make dense, from the grid's metadata (the active box
-/// OpenVDB records as `file_bbox_min`/`file_bbox_max`), without reading its tree; `None` when
-/// the metadata is absent.
-pub(crate) fn peek_len(bytes: &[u8], grid: Option<&str>) -> ParseResult<Option<u64>> {
+/// The number of voxels [`parse`] would make dense for the level set named `grid` (or the
+/// first), from its tree's topology (without its values), after the same checks.
+pub(crate) fn peek_len(bytes: &[u8], grid: Option<&str>) -> ParseResult<u64> {
     let mut b = Bytes::new(bytes);
     let descriptors = read_header(&mut b)?;
-    let (_, head) = choose(&mut b, &descriptors, grid)?;
-    Ok(head.bbox.map(|(lo, hi)| {
-        (0..3)
-            .map(|a| {
-                (i64::from(hi[a]) - i64::from(lo[a]) + 1 + 2 * i64::from(MARGIN)).max(0) as u64
-            })
-            .fold(1u64, u64::saturating_mul)
-    }))
+    let chosen = topology(&mut b, &descriptors, grid)?;
+    Ok(chosen.dims.iter().map(|&n| n as u64).product())
 }
 
 /// Reads the file header and the table of grids.
@@ -212,6 +272,16 @@ fn read_header(b: &mut Bytes<'_>) -> ParseResult<Vec<Descriptor>> {
         ));
     }
     let count = b.i32("the grid count")?;
+    // Each entry takes at least three string lengths and three positions: a count the rest
+    // of the file cannot hold is corrupt (and would be trusted for nothing).
+    const ENTRY: u64 = 3 * 4 + 3 * 8;
+    let room = b.remaining() as u64 / ENTRY;
+    if u64::try_from(count).is_ok_and(|c| c > room) {
+        return Err(ParseError::new(format!(
+            "the file says it holds {count} grids, more than its {} bytes can describe",
+            b.len()
+        )));
+    }
     let mut out = Vec::new();
     for _ in 0..count.max(0) {
         let name = b.string("a grid's name")?;
@@ -221,6 +291,16 @@ fn read_header(b: &mut Bytes<'_>) -> ParseResult<Vec<Descriptor>> {
         let _blocks = b.i64("a grid's position")?;
         // Each grid's entry is written just before the grid: the next entry follows its end.
         let end = b.i64("a grid's position")?;
+        // Entries follow one another: an entry that ends where it began, or earlier, would
+        // make the table loop (hostile test E1: 119 bytes grew to 5 GB).
+        if u64::try_from(end).is_ok_and(|e| e <= b.offset() as u64) {
+            return Err(ParseError::new(format!(
+                "grid {:?}'s entry says the next one starts at byte {end}, not after it (byte {}): \
+                 the table of grids is corrupt",
+                name,
+                b.offset()
+            )));
+        }
         b.seek(
             u64::try_from(end).unwrap_or(u64::MAX),
             "the next grid's entry",
@@ -299,9 +379,7 @@ fn read_grid_head(b: &mut Bytes<'_>) -> ParseResult<GridHead> {
     let mut head = GridHead {
         compression,
         class: "unknown".into(),
-        bbox: None,
     };
-    let (mut lo, mut hi) = (None, None);
     let count = b.u32("a grid's metadata")?;
     for _ in 0..count {
         let name = b.string("a metadata name")?;
@@ -310,19 +388,12 @@ fn read_grid_head(b: &mut Bytes<'_>) -> ParseResult<GridHead> {
         let value = b.take(size, "a metadata value")?;
         match (name.as_str(), kind.as_str()) {
             ("class", "string") => head.class = String::from_utf8_lossy(value).into_owned(),
-            ("file_bbox_min", "vec3i") => lo = coord(value),
-            ("file_bbox_max", "vec3i") => hi = coord(value),
             _ => {}
         }
     }
-    head.bbox = lo.zip(hi);
     Ok(head)
 }
 
-fn coord(v: &[u8]) -> Option<[i32; 3]> {
-    let mut b = Bytes::new(v);
-    b.coord("").ok()
-}
 
 /// A zlib stream (a zipped block, or a Blosc stream of the zlib codec) that must hold exactly
 /// `nbytes`; `what` names it in the error.

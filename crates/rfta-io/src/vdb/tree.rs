@@ -58,8 +58,9 @@ const UPPER: (u32, u32) = (5, 7);
 const LOWER: (u32, u32) = (4, 3);
 
 impl Tree {
-    /// Reads the topology and then the leaves' values.
-    pub(super) fn read(b: &mut Bytes<'_>, s: Storage) -> ParseResult<Self> {
+    /// Reads the topology: the background, the tiles and where the leaves are with their
+    /// value masks (their values follow, [`Tree::read_values`]).
+    pub(super) fn read_topology(b: &mut Bytes<'_>, s: Storage) -> ParseResult<Self> {
         let _buffer_count = b.i32("the tree")?;
         let background = value(b, s.double, "the background value")?;
         let mut tree = Self {
@@ -84,11 +85,17 @@ impl Tree {
             let origin = b.coord("a root child")?;
             tree.read_internal(b, s, origin, UPPER)?;
         }
-        for leaf in &mut tree.leaves {
+        Ok(tree)
+    }
+
+    /// Reads the leaves' values, which follow the topology (512 values a leaf).
+    pub(super) fn read_values(&mut self, b: &mut Bytes<'_>, s: Storage) -> ParseResult<()> {
+        let background = self.background;
+        for leaf in &mut self.leaves {
             leaf.active = mask::<8>(b, "a leaf's value mask")?;
             leaf.values = compressed_values(b, s, 512, &leaf.active, background)?;
         }
-        Ok(tree)
+        Ok(())
     }
 
     /// Keeps a tile unless it is inactive background, what every voxel is by default.
