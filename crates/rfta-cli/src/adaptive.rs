@@ -11,7 +11,7 @@ use rfta::adaptive::{AdaptiveReconstruction, Budget, OracleError, Pass};
 use rfta::geom::Aabb;
 use rfta::geom::glam::DVec3;
 use rfta::{Params, Stage};
-use rfta_mesh::{MeshIndex, Topology};
+use rfta_mesh::{MeshSdf, Topology};
 
 use crate::reconstruct::{Args, deliver};
 use crate::ui::Ui;
@@ -40,11 +40,10 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
     let mut mesh = rfta_io::read_mesh(mesh_path)?;
     let name = mesh_path.display().to_string();
     crate::sample::as_sdf_source(&mut mesh, &name, ui);
-    let index =
-        MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
+    let sdf = MeshSdf::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
     let bounds = match args.bounds {
         Some(b) => Aabb::new(b.min, b.max),
-        None => grown(index.bounds()),
+        None => crate::sample::cube_around(sdf.bounds()),
     };
     let mut params = args.tuning.params()?;
     params.clamp = args.checks.clamp;
@@ -52,7 +51,7 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
     let budget = args.budget.unwrap_or(30_000);
     let mut oracle =
-        |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(index.signed_distances(p)) };
+        |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(sdf.signed_distances(p)) };
     ui.say(format!(
         "asking {name}'s signed distance at most {} times over [{}, {}]",
         budget,
@@ -145,21 +144,16 @@ fn summarize(out: &AdaptiveReconstruction, ui: &Ui) {
         ));
     }
     ui.say(format!(
-        "{} evaluations of the SDF in {} passes (finest spacing {:.4}): {:.2} s in rfta, {:.2} s in the SDF",
+        "{} evaluations of the SDF in {} passes (finest spacing {}): {:.2} s in rfta, {:.2} s in the SDF",
         r.evaluations,
         r.passes.len(),
-        r.finest_spacing,
+        crate::sample::num(r.finest_spacing),
         r.rfta_seconds,
         r.oracle_seconds
     ));
 }
 
-/// A mesh's box grown by a tenth of its longest side on every side.
-fn grown(b: Aabb) -> Aabb {
-    let margin = 0.1 * (b.max - b.min).max_element().max(f64::MIN_POSITIVE);
-    Aabb::new(b.min - DVec3::splat(margin), b.max + DVec3::splat(margin))
-}
-
 fn fmt_point(p: DVec3) -> String {
-    format!("{:.4}, {:.4}, {:.4}", p.x, p.y, p.z)
+    use crate::sample::num;
+    format!("{}, {}, {}", num(p.x), num(p.y), num(p.z))
 }

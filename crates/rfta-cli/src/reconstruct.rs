@@ -49,7 +49,7 @@ pub(crate) struct Args {
     #[arg(short, long)]
     pub(crate) output: PathBuf,
     /// Grid bounds for an .npy grid, overriding its sidecar (as for `sample`); with --from-mesh,
-    /// the box sampled (default: the mesh's box grown by a tenth of its longest side).
+    /// the box sampled (default: the cube around the mesh's box, its longest side grown by a tenth at each end).
     #[arg(long, value_name = "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX", value_parser = parse_bounds)]
     pub(crate) bounds: Option<rfta_io::GridBounds>,
     /// The level set of a .vdb file to reconstruct, by name (default: the first level set).

@@ -6,7 +6,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use rfta_geom::{Grid, TriMesh, glam::DVec3, shapes};
 use rfta_io::GridBounds;
-use rfta_mesh::{MeshIndex, Topology};
+use rfta_geom::Aabb;
+use rfta_mesh::{MeshSdf, Topology};
 
 use crate::ui::{Ui, parse_bounds};
 
@@ -101,7 +102,17 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         ui.say(format!("wrote {}", path.display()));
     }
     as_sdf_source(&mut mesh, &name, ui);
-    let bounds = args.bounds.unwrap_or_default();
+    let t0 = Instant::now();
+    let sdf = MeshSdf::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
+    ui.detail(format!(
+        "index over {} triangles built in {:.3} s",
+        mesh.n_faces(),
+        t0.elapsed().as_secs_f64()
+    ));
+    let bounds = match args.bounds {
+        Some(b) => b,
+        None => default_bounds(sdf.bounds(), &name, ui),
+    };
     let grid =
         Grid::from_bounds([args.res + 1; 3], bounds.min, bounds.max).context("invalid grid")?;
     let n = grid.len();
@@ -117,18 +128,9 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
             rfta::format_bytes(limit)
         );
     }
-    let t0 = Instant::now();
-    let index =
-        MeshIndex::new(&mesh).with_context(|| format!("{name}: cannot measure distances"))?;
-    ui.detail(format!(
-        "index over {} triangles built in {:.3} s",
-        mesh.n_faces(),
-        t0.elapsed().as_secs_f64()
-    ));
-
     let t1 = Instant::now();
     let bar = ui.progress(grid.dims()[0] as u64, "sampling");
-    let values = index.signed_distance_grid(&grid, &|| bar.inc(1));
+    let values = sdf.signed_distance_grid(&grid, &|| bar.inc(1));
     bar.finish_and_clear();
     let n_inside = values.iter().filter(|v| **v < 0.0).count();
     ui.detail(format!(
@@ -153,6 +155,48 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     Ok(())
 }
 
+/// The cube a mesh is sampled in when no box is given, here and by `reconstruct --from-mesh`:
+/// centred on the mesh's box, its side the box's longest side grown by a tenth on each end
+/// (one spacing for every axis: a box stretched to the mesh would give each axis its own).
+pub(crate) fn cube_around(mesh: Aabb) -> Aabb {
+    let centre = (mesh.min + mesh.max) / 2.0;
+    let side = (mesh.max - mesh.min).max_element().max(f64::MIN_POSITIVE);
+    let half = DVec3::splat(0.6 * side);
+    Aabb::new(centre - half, centre + half)
+}
+
+/// `[-1, 1]^3` (the paper's box) when the mesh lies in it; otherwise [`cube_around`] the mesh,
+/// said aloud: the default box would cut the shape (hostile test E17: a mesh spanning -5 to 10
+/// was sampled in [-1, 1]^3 without a word).
+fn default_bounds(mesh: Aabb, name: &str, ui: &Ui) -> GridBounds {
+    let unit = GridBounds::default();
+    if mesh.min.cmpge(unit.min).all() && mesh.max.cmple(unit.max).all() {
+        return unit;
+    }
+    let cube = cube_around(mesh);
+    ui.say(format!(
+        "note: {name} spans [{}, {}], beyond the default box [-1, 1]^3; sampling the cube [{}, {}] around it (--bounds chooses the box)",
+        fmt_vec(mesh.min),
+        fmt_vec(mesh.max),
+        fmt_vec(cube.min),
+        fmt_vec(cube.max)
+    ));
+    GridBounds {
+        min: cube.min,
+        max: cube.max,
+    }
+}
+
 pub(crate) fn fmt_vec(v: DVec3) -> String {
-    format!("({:.4}, {:.4}, {:.4})", v.x, v.y, v.z)
+    format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
+}
+
+/// A coordinate or length as people read it: four decimals near the unit, scientific notation
+/// far from it (a box at 1e155 printed 160 digits a number).
+pub(crate) fn num(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.4e}")
+    }
 }

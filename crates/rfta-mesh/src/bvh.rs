@@ -1,7 +1,7 @@
 //! The bounding volume hierarchy over triangles and the distance queries.
 
 use rayon::prelude::*;
-use rfta_geom::{Aabb, Grid, TriMesh, glam::DVec3, kernels};
+use rfta_geom::{Aabb, TriMesh, glam::DVec3, kernels};
 
 use crate::winding::Moments;
 use crate::{Error, Result};
@@ -524,24 +524,6 @@ impl MeshIndex {
             .par_iter()
             .map(|&p| self.signed_distance(p))
             .collect()
-    }
-
-    /// [`MeshIndex::signed_distance`] at every point of `grid`, in the grid's flat order, in
-    /// parallel over x slabs; `on_slab` is called after each slab (for progress reporting).
-    /// Each value depends only on its point, so the result does not depend on the thread count.
-    pub fn signed_distance_grid(&self, grid: &Grid, on_slab: &(dyn Fn() + Sync)) -> Vec<f64> {
-        let [nx, ny, nz] = grid.dims();
-        let slabs: Vec<Vec<f64>> = (0..nx)
-            .into_par_iter()
-            .map(|i| {
-                let slab = (0..ny * nz)
-                    .map(|jk| self.signed_distance(grid.position(i * ny * nz + jk)))
-                    .collect();
-                on_slab();
-                slab
-            })
-            .collect();
-        slabs.concat()
     }
 
     /// [`MeshIndex::unsigned_distance`] at every point, in parallel.

@@ -559,14 +559,14 @@ fn marching_cubes<'py>(
     mesh_arrays(py, &mesh)
 }
 
-fn mesh_index(
+fn mesh_sdf(
     v: &PyReadonlyArray2<'_, f64>,
     f: &PyReadonlyArray2<'_, i64>,
-) -> PyResult<rfta_mesh::MeshIndex> {
+) -> PyResult<rfta_mesh::MeshSdf> {
     let vertices = points(v, "V")?;
     let faces = faces(f, vertices.len())?;
     let mesh = TriMesh { vertices, faces };
-    rfta_mesh::MeshIndex::new(&mesh).map_err(|e| PyValueError::new_err(e.to_string()))
+    rfta_mesh::MeshSdf::new(&mesh).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// Signed distance from each point to the mesh `(V, F)`, negative inside (by winding number).
@@ -578,7 +578,7 @@ fn signed_distance<'py>(
     f: PyReadonlyArray2<'py, i64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let q = self::points(&points, "points")?;
-    let index = mesh_index(&v, &f)?;
+    let index = mesh_sdf(&v, &f)?;
     let d = py.detach(|| index.signed_distances(&q));
     Ok(PyArray1::from_vec(py, d))
 }
@@ -595,7 +595,7 @@ fn sample_sdf<'py>(
     hi: [f64; 3],
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let grid = grid_of(dims, lo, hi)?;
-    let index = mesh_index(&v, &f)?;
+    let index = mesh_sdf(&v, &f)?;
     let values = py.detach(|| index.signed_distance_grid(&grid, &|| {}));
     Ok(PyArray1::from_vec(py, values))
 }

@@ -32,9 +32,9 @@ fn workloads() -> Vec<(String, Vec<Sphere>)> {
         out.push((format!("{}", grid.len()), spheres_of(&grid, &raw.values)));
     }
     let mesh = rfta_io::read_mesh(&bunny.join("gt.obj")).expect("mesh");
-    let index = rfta_mesh::MeshIndex::new(&mesh).expect("index");
+    let sdf = rfta_mesh::MeshSdf::new(&mesh).expect("sdf");
     let grid = Grid::cube(99, -1.0, 1.0).expect("grid");
-    let values = index.signed_distance_grid(&grid, &|| {});
+    let values = sdf.signed_distance_grid(&grid, &|| {});
     out.push((format!("{}", grid.len()), spheres_of(&grid, &values)));
     out
 }

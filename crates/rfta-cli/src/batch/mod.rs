@@ -167,10 +167,17 @@ fn run_rows(
     status_path: &Path,
     jobs: &[Job],
 ) -> Result<()> {
-    // Rows an earlier run of this shard finished: kept (as `skipped`), the file rewritten with
-    // them only, then this run's rows appended as they finish.
-    let done = earlier_rows(status_path, base)?;
-    let mut status = StatusFile::create(status_path, &done)?;
+    // Rows of this shard an earlier run finished are skipped; their records stay in the file
+    // (which other shards may share), and this run's rows are appended as they finish.
+    let mine: HashSet<(usize, &str, &str)> = jobs
+        .iter()
+        .map(|j| (j.row, j.input.as_str(), j.output.as_str()))
+        .collect();
+    let done: Vec<StatusRow> = earlier_rows(status_path, base)?
+        .into_iter()
+        .filter(|d| mine.contains(&(d.row, d.input.as_str(), d.output.as_str())))
+        .collect();
+    let mut status = StatusFile::open(status_path)?;
     let finished: HashSet<(usize, &str, &str)> = done
         .iter()
         .map(|d| (d.row, d.input.as_str(), d.output.as_str()))

@@ -145,13 +145,16 @@ pub(super) fn figures(report: &Path) -> Vec<String> {
         .collect()
 }
 
-/// The rows of a status file (none if it does not exist).
+/// The rows of a status file (none if it does not exist). A last line without its line break
+/// was cut short by a kill: no record (its row runs again). Any other line that is not a
+/// record rfta writes is an error naming it: a record dropped silently would hide its row
+/// (hostile test E14: a failed row vanished from a merge that exited 0).
 pub(super) fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
     if !path.exists() {
         return Ok(Vec::new());
     }
     let table = rfta_io::table::read_table(path)?;
-    if !["row", "input", "output", "status"]
+    if !["row", "input", "output", "status", "seconds"]
         .iter()
         .all(|c| table.column(c).is_some())
     {
@@ -161,14 +164,29 @@ pub(super) fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
             table.columns.join(",")
         );
     }
-    // Rows are appended whole, line break last: a line cut short by a kill (no line break, or
-    // too few fields) is no record, and its row runs again.
-    Ok(table
-        .rows
-        .iter()
-        .filter(|r| r.complete && r.fields.len() == table.columns.len())
-        .filter_map(|r| StatusRow::parse(&table, r))
-        .collect())
+    let mut rows = Vec::new();
+    for r in &table.rows {
+        if !r.complete || r.is_blank() {
+            continue;
+        }
+        let record = (r.fields.len() == table.columns.len())
+            .then(|| StatusRow::parse(&table, r))
+            .flatten();
+        match record {
+            Some(record) => rows.push(record),
+            None => bail!(
+                "{}: line {}: not a status record ({} fields where the header has {}; a row \
+                 number, a status of {} and the seconds as a number are needed): {}",
+                path.display(),
+                r.line,
+                r.fields.len(),
+                table.columns.len(),
+                Status::ALL.map(Status::name).join(", "),
+                r.fields.join(",")
+            ),
+        }
+    }
+    Ok(rows)
 }
 
 /// The rows of an earlier run that need not run again: the last word on each row is `ok` or
@@ -199,32 +217,69 @@ pub(super) fn last_by_row(rows: Vec<StatusRow>) -> Vec<StatusRow> {
     rows
 }
 
-/// A status file written a row at a time.
+/// A status file written a row at a time, which the shards of a job array may share: each
+/// record is appended whole under an exclusive lock of the file, after the header when the
+/// file is new and after a line break when the last line was cut short (hostile test E5: shards
+/// that each rewrote a shared file at their start lost each other's records).
 pub(super) struct StatusFile {
     pub(super) file: File,
 }
 
 impl StatusFile {
-    /// Starts `path` afresh (atomically) with `rows`, then opens it for appending.
-    pub(super) fn create(path: &Path, rows: &[StatusRow]) -> Result<Self> {
-        rfta_io::write_atomic(path, |w| {
-            writeln!(w, "{}", rfta_io::table::join_csv(&header()))?;
-            for r in rows {
-                writeln!(w, "{}", rfta_io::table::join_csv(&r.fields()))?;
-            }
-            Ok(())
-        })?;
+    /// Opens `path` for appending, creating it with its header if it is missing or empty; the
+    /// records there stay (a rerun's records follow them, and the last record of a row counts).
+    pub(super) fn open(path: &Path) -> Result<Self> {
         let file = std::fs::OpenOptions::new()
+            .read(true)
             .append(true)
+            .create(true)
             .open(path)
             .with_context(|| format!("{}: cannot open for appending", path.display()))?;
-        Ok(Self { file })
+        let mut status = Self { file };
+        status.locked_append(None)?;
+        Ok(status)
+    }
+
+    /// Under the lock: the header if the file is empty, a line break if its last line has none,
+    /// then `row` if given, synced.
+    fn locked_append(&mut self, row: Option<&StatusRow>) -> Result<()> {
+        self.file.lock()?;
+        let result = (|| -> Result<()> {
+            let len = self.file.metadata()?.len();
+            let mut text = String::new();
+            if len == 0 {
+                text += &rfta_io::table::join_csv(&header());
+                text.push('\n');
+            } else {
+                let mut last = [0u8; 1];
+                #[cfg(unix)]
+                std::os::unix::fs::FileExt::read_exact_at(&self.file, &mut last, len - 1)?;
+                #[cfg(not(unix))]
+                {
+                    last[0] = b'\n';
+                }
+                if last[0] != b'\n' {
+                    text.push('\n');
+                }
+            }
+            if let Some(row) = row {
+                text += &rfta_io::table::join_csv(&row.fields());
+                text.push('\n');
+            }
+            if !text.is_empty() {
+                self.file.write_all(text.as_bytes())?;
+                self.file.sync_data()?;
+            }
+            Ok(())
+        })();
+        let unlocked = self.file.unlock();
+        result?;
+        unlocked?;
+        Ok(())
     }
 
     pub(super) fn append(&mut self, row: &StatusRow) -> Result<()> {
-        writeln!(self.file, "{}", rfta_io::table::join_csv(&row.fields()))?;
-        self.file.sync_data()?;
-        Ok(())
+        self.locked_append(Some(row))
     }
 }
 
