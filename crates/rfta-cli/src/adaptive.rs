@@ -45,11 +45,26 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
         Some(b) => Aabb::new(b.min, b.max),
         None => crate::sample::cube_around(sdf.bounds()),
     };
+    // A box that misses the mesh holds none of its surface: answered as no surface (exit 3,
+    // an empty mesh), saying why, before any work (hostile test E13: it was blamed on the SDF).
+    if !bounds.overlaps(&sdf.bounds()) {
+        let why = format!(
+            "--bounds [{}, {}] does not meet the mesh, which spans [{}, {}]: the box holds none of its surface",
+            fmt_point(bounds.min),
+            fmt_point(bounds.max),
+            fmt_point(sdf.bounds().min),
+            fmt_point(sdf.bounds().max)
+        );
+        return crate::reconstruct::no_surface(args, &why, ui);
+    }
     let mut params = args.tuning.params()?;
     params.clamp = args.checks.clamp;
     params.check = !args.checks.no_check;
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
     let budget = args.budget.unwrap_or(30_000);
+    rfta::check_memory(budget, &params).with_context(|| {
+        format!("--budget {budget}: refused before asking {name}'s distance")
+    })?;
     let mut oracle =
         |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(sdf.signed_distances(p)) };
     ui.say(format!(
@@ -59,8 +74,12 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
         fmt_point(bounds.max)
     ));
     let t = Instant::now();
-    let out = run(&mut oracle, bounds, budget, &params, ui)
-        .with_context(|| format!("{name}: adaptive reconstruction failed"))?;
+    let out = match run(&mut oracle, bounds, budget, &params, ui) {
+        Err(e) if matches!(e.downcast_ref(), Some(rfta::Error::NoSurface { .. })) => {
+            return crate::reconstruct::no_surface(args, &e, ui);
+        }
+        other => other.with_context(|| format!("{name}: adaptive reconstruction failed"))?,
+    };
     let seconds = t.elapsed().as_secs_f64();
     summarize(&out, ui);
     let extra = serde_json::to_value(&out.report)?;

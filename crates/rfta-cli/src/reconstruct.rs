@@ -516,7 +516,7 @@ fn write_report(
 
 /// The input describes no surface: an empty mesh is written, and the reason returned as
 /// [`Exit::no_surface`] (exit status 3).
-fn no_surface(args: &Args, why: &dyn std::fmt::Display, ui: &Ui) -> Result<()> {
+pub(crate) fn no_surface(args: &Args, why: &dyn std::fmt::Display, ui: &Ui) -> Result<()> {
     write(&args.output, &TriMesh::default(), ui)?;
     Err(Exit::no_surface(format!(
         "{}: {why}; wrote an empty mesh to {}",

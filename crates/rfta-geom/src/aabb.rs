@@ -79,6 +79,11 @@ impl Aabb {
         0.5 * (self.min + self.max)
     }
 
+    /// Whether the two closed boxes share a point.
+    pub fn overlaps(&self, other: &Self) -> bool {
+        self.min.cmple(other.max).all() && other.min.cmple(self.max).all()
+    }
+
     /// Whether `p` is in the closed box.
     pub fn contains(&self, p: DVec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()

@@ -193,7 +193,14 @@ fn drawing(
             )
         }));
     }
-    let cloud = merge_by_owner(parts);
+    let mut cloud = merge_by_owner(parts);
+    // Samples of one sign show a surface only where their spheres leave room inside the box
+    // they were taken in (a thin shape between grid points). Beyond it every sphere's outer
+    // side is free, and points there would put a surface where no sample looked (hostile
+    // test E8: a ramp of positive values gave a mesh reaching three times past its box).
+    if neg.is_empty() || pos.is_empty() {
+        cloud = within_samples_box(unit, cloud);
+    }
     report.feasible_initial = cloud.len();
     journal.timings.push((crate::Step::Rasterize, raster_time));
     journal
@@ -216,6 +223,22 @@ fn drawing(
         });
     }
     Ok((cloud, report))
+}
+
+/// The points of `cloud` (in the unit box) that lie in the box of the samples.
+fn within_samples_box(unit: &UnitBox, cloud: TangentPoints) -> TangentPoints {
+    let b = unit.samples_box();
+    let (lo, hi) = (unit.to_unit(b.min), unit.to_unit(b.max));
+    let eps = 1e-9;
+    let mut out = TangentPoints::default();
+    for ((p, n), o) in cloud.points.into_iter().zip(cloud.normals).zip(cloud.owners) {
+        if p.cmpge(lo - eps).all() && p.cmple(hi + eps).all() {
+            out.points.push(p);
+            out.normals.push(n);
+            out.owners.push(o);
+        }
+    }
+    out
 }
 
 /// `b` indices drawn with replacement from `set` (all of it when `b` is 0 or at least its size).

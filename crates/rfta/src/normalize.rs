@@ -36,6 +36,8 @@ impl rfta_spsr::SideSet for SampleSides<'_> {
 pub(crate) struct UnitBox {
     trans: DVec3,
     scale: f64,
+    /// The samples' largest coordinates (their box is `trans..upper`).
+    upper: DVec3,
     /// Signed values, scaled.
     pub(crate) values: Vec<f64>,
     /// Spheres of radius `radius_scale |s|`, or the clamp for clamped samples (`|s| >= clamp`).
@@ -82,6 +84,7 @@ impl UnitBox {
         Self {
             trans,
             scale,
+            upper: hi,
             values,
             spheres,
             clamp: cap,
@@ -240,6 +243,11 @@ impl UnitBox {
                 s.center.clamp(lo, hi).distance_squared(s.center) < reach * reach
             })
             .collect()
+    }
+
+    /// The box of the samples' positions, in the samples' coordinates.
+    pub(crate) fn samples_box(&self) -> rfta_geom::Aabb {
+        rfta_geom::Aabb::new(self.trans, self.upper)
     }
 
     /// The samples inside `bounds` (a box in the samples' coordinates), in index order: on grids

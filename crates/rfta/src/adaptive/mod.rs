@@ -159,6 +159,10 @@ pub fn reconstruct_adaptive(
             budget.evaluations
         )));
     }
+    // What the budget's samples would need, before the first evaluation (hostile test E15: a
+    // budget of 1e11 ran on for minutes): an adaptive run holds at least what a grid of as many
+    // samples does.
+    crate::check_memory(budget.evaluations, params)?;
     let mut asker = Asker {
         oracle,
         batches: 0,
