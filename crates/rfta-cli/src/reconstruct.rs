@@ -448,6 +448,12 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
         Err(e) if matches!(e.downcast_ref(), Some(rfta::Error::NoSurface { .. })) => {
             return no_surface(&args, &e, ui);
         }
+        Err(e) if matches!(e.downcast_ref(), Some(rfta::Error::NotADistance(_))) => {
+            return Err(e.context(format!(
+                "{}: reconstruction refused (--no-check turns the check off)",
+                input.display()
+            )));
+        }
         other => other.with_context(|| format!("{}: reconstruction failed", input.display()))?,
     };
     let seconds = t.elapsed().as_secs_f64();

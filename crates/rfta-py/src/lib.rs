@@ -100,9 +100,11 @@ fn error(e: rfta::Error) -> PyErr {
     use rfta::Error as E;
     match e {
         E::NoSurface { .. } => NoSurfaceError::new_err(e.to_string()),
+        E::NotADistance(_) => {
+            PyValueError::new_err(format!("{e} (check=False turns the check off)"))
+        }
         E::InvalidParams(_)
         | E::OracleAnswer { .. }
-        | E::NotADistance(_)
         | E::TooLarge { .. }
         | E::TooFewPoints { .. }
         | E::ThreadPool { .. } => PyValueError::new_err(e.to_string()),

@@ -63,7 +63,15 @@ pub struct Inspection {
     /// most `d` over `d`, so relative noise of `e` shows as up to `e` where the gradient follows
     /// the axis, far more often than across the surface.
     pub lipschitz_excess: f64,
+    /// The samples on the outside of the set (a grid's outer faces; otherwise the twentieth
+    /// farthest from the centre of their box): `(negative, all)` of them, zeros left out.
+    pub rim: (usize, usize),
 }
+
+/// The share of the rim's samples ([`Inspection::rim`]) that must be negative, with positive
+/// samples within, for the field to look inside-positive: a shape sampled in a box around it
+/// has positive values all around.
+pub const FLIPPED_RIM: f64 = 0.95;
 
 /// Excess over the 1-Lipschitz bound (or the separation bound) beyond this fraction of the values
 /// is not counted as noise (the separation test judges such fields).
@@ -154,7 +162,36 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
     }
     out.clamp = detect_clamp(samples);
     out.lipschitz_excess = lipschitz_excess(samples);
+    out.rim = rim(samples);
     out
+}
+
+/// [`Inspection::rim`].
+fn rim(samples: &SdfSamples) -> (usize, usize) {
+    let values = samples.values();
+    let on_rim: Vec<usize> = match samples.as_grid() {
+        Some(grid) => {
+            let [nx, ny, nz] = grid.dims();
+            (0..values.len())
+                .filter(|&i| {
+                    let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
+                    x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz
+                })
+                .collect()
+        }
+        None => {
+            let c = samples.bounds().center();
+            let mut by_distance: Vec<(f64, usize)> = (0..values.len())
+                .map(|i| (samples.position(i).distance_squared(c), i))
+                .collect();
+            by_distance.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            let take = (values.len() / 20).max(8).min(values.len());
+            by_distance[..take].iter().map(|&(_, i)| i).collect()
+        }
+    };
+    let negative = on_rim.iter().filter(|&&i| values[i] < 0.0).count();
+    let all = on_rim.iter().filter(|&&i| values[i] != 0.0).count();
+    (negative, all)
 }
 
 /// [`Inspection::lipschitz_excess`] (0 for scattered samples).
@@ -309,6 +346,17 @@ pub(crate) fn samples(
         journal.warnings.push(format!(
             "the values look clamped at {c}: {count} samples sit on flat plateaus at that magnitude; they are treated as at least {c} from the surface (set a clamp to override, or turn the check off)"
         ));
+    }
+    // Inside negative is the convention (the paper's, gpytoolbox's, OpenVDB's): a field whose
+    // outside is negative all around, with positive samples within, is most likely of the
+    // other convention, and reconstructing it as it is turns the mesh inside out and breaks it
+    // (hostile test E18: six pieces, 9,121 samples on the wrong side, no word).
+    let (rim_negative, rim_all) = found.rim;
+    let has_positive = samples.values().iter().any(|&v| v > 0.0);
+    if has_positive && rim_all > 0 && rim_negative as f64 >= FLIPPED_RIM * rim_all as f64 {
+        return Err(Error::NotADistance(format!(
+            "the field looks inside-positive: {rim_negative} of the {rim_all} samples on the outside of the set are negative (inside), around positive ones; rfta takes negative values as inside (as gpytoolbox and OpenVDB do), so negate the values. If the shape truly fills the box around a void, turn the check off"
+        )));
     }
     if let Some(&i) = found
         .beyond_extent
