@@ -145,8 +145,120 @@ fn the_first_level_set_is_taken_and_others_are_named_with_what_they_are() {
 #[test]
 fn the_dense_size_is_known_from_the_header() {
     let t = twin("box");
-    let n = peek_sdf_len(&data("box.vdb")).expect("test data");
+    let n = peek_sdf_len(&data("box.vdb"), None).expect("test data");
     assert_eq!(n, Some(t.dims.iter().product()));
+    // The level set named, not the file's first grid (hostile test E2: `--grid` was measured by
+    // the first grid's metadata).
+    let ball = twin("ball");
+    let n = peek_sdf_len(&data("three.vdb"), Some("ball")).expect("test data");
+    assert_eq!(n, Some(ball.dims.iter().product()));
+}
+
+/// A copy of `name` with `edit` applied, in a folder of its own.
+fn edited(name: &str, tag: &str, edit: impl FnOnce(&mut Vec<u8>)) -> PathBuf {
+    let mut bytes = std::fs::read(data(name)).expect("test data");
+    edit(&mut bytes);
+    let dir = std::env::temp_dir().join(format!("rfta-io-vdb-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).expect("scratch");
+    path
+}
+
+/// The offset of `needle` in `hay` (the only one).
+fn find(hay: &[u8], needle: &[u8]) -> usize {
+    let hits: Vec<usize> = hay
+        .windows(needle.len())
+        .enumerate()
+        .filter(|(_, w)| *w == needle)
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(hits.len(), 1, "test data: {needle:?} found {} times", hits.len());
+    hits[0]
+}
+
+/// The size comes from the tree itself: a file whose active-box metadata is gone (renamed) is
+/// measured the same (hostile test E2: without it, 8 GB were allocated unchecked).
+#[test]
+fn the_dense_size_does_not_depend_on_metadata() {
+    let t = twin("box");
+    let path = edited("box.vdb", "meta", |b| {
+        for key in [&b"file_bbox_min"[..], b"file_bbox_max"] {
+            let at = find(b, key);
+            b[at + key.len() - 1] = b'X';
+        }
+    });
+    assert_eq!(
+        peek_sdf_len(&path, None).expect("read"),
+        Some(t.dims.iter().product())
+    );
+    same_as(&read_sdf(&path, None).expect("read"), &t, |_| 0.0);
+}
+
+/// A background that is not positive is no level set's: refused by name, by every reader
+/// (hostile test E9: an error about a clamp nobody set, while `info` said valid).
+#[test]
+fn a_background_that_is_not_positive_is_refused() {
+    let t = twin("box");
+    for (tag, value) in [("zero", 0.0f32), ("negative", -(t.background as f32))] {
+        let path = edited("box.vdb", tag, |b| {
+            // The tree starts with its buffer count (1) and the background.
+            let mut key = 1i32.to_le_bytes().to_vec();
+            key.extend((t.background as f32).to_le_bytes());
+            let at = find(b, &key) + 4;
+            b[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        });
+        for e in [
+            read_sdf(&path, None).expect_err("refused").to_string(),
+            peek_sdf_len(&path, None).expect_err("refused").to_string(),
+        ] {
+            assert!(e.contains("background value") && e.contains("not a signed distance level set"), "{e}");
+        }
+    }
+}
+
+/// A table of grids that claims more entries than the file can hold, or whose entry points back
+/// at itself, is refused at once (hostile test E1: 119 bytes looped until 5 GB were taken).
+#[test]
+fn a_table_of_grids_that_loops_is_refused() {
+    // The header rfta reads: magic, file version 224, library version, "has offsets", a UUID,
+    // no file metadata; then the grid count and one entry.
+    let header = |count: i32| {
+        let mut b = Vec::new();
+        b.extend(0x5644_4220i64.to_le_bytes());
+        b.extend(224u32.to_le_bytes());
+        b.extend([10u32.to_le_bytes(), 0u32.to_le_bytes()].concat());
+        b.push(1);
+        b.extend([b'0'; 36]);
+        b.extend(0u32.to_le_bytes());
+        b.extend(count.to_le_bytes());
+        b
+    };
+    let entry = |b: &mut Vec<u8>, end: i64| {
+        for text in ["ls", "Tree_float_5_4_3", ""] {
+            b.extend((text.len() as u32).to_le_bytes());
+            b.extend(text.as_bytes());
+        }
+        b.extend(0i64.to_le_bytes());
+        b.extend(0i64.to_le_bytes());
+        b.extend(end.to_le_bytes());
+    };
+    let dir = std::env::temp_dir().join(format!("rfta-io-vdb-loop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let path = dir.join("loop.vdb");
+    let mut many = header(i32::MAX);
+    let start = many.len() as i64;
+    entry(&mut many, start);
+    std::fs::write(&path, &many).expect("scratch");
+    let e = read_sdf(&path, None).expect_err("refused").to_string();
+    assert!(e.contains("more than its"), "{e}");
+    let mut back = header(2);
+    let start = back.len() as i64;
+    entry(&mut back, start);
+    entry(&mut back, start);
+    std::fs::write(&path, &back).expect("scratch");
+    let e = read_sdf(&path, None).expect_err("refused").to_string();
+    assert!(e.contains("table of grids is corrupt"), "{e}");
 }
 
 #[test]
