@@ -2,7 +2,7 @@
 //! `meta.json` records, and the library's grid sampler reproduces every reference grid.
 
 use rfta_geom::Layout;
-use rfta_mesh::{MeshIndex, Topology};
+use rfta_mesh::{MeshSdf, Topology};
 
 /// Reads `"key": value` numbers from the `gt_topology` object of `meta.json` (a flat scan,
 /// enough for the fixed layout the data README documents).
@@ -53,7 +53,7 @@ fn grid_sampler_reproduces_every_reference_resolution() {
     for name in rfta_testkit::input_names(&data) {
         let dir = data.join("inputs").join(&name);
         let index =
-            MeshIndex::new(&rfta_io::read_mesh(&dir.join("gt.obj")).expect("mesh")).expect("index");
+            MeshSdf::new(&rfta_io::read_mesh(&dir.join("gt.obj")).expect("mesh")).expect("index");
         // n = 20 is covered through the CLI; here the coarser and finer grids through the library.
         for n in [10, 30] {
             let reference =

@@ -62,11 +62,9 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
     params.check = !args.checks.no_check;
     params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
     let budget = args.budget.unwrap_or(30_000);
-    rfta::check_memory(budget, &params).with_context(|| {
-        format!("--budget {budget}: refused before asking {name}'s distance")
-    })?;
-    let mut oracle =
-        |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(sdf.signed_distances(p)) };
+    rfta::check_memory(budget, &params)
+        .with_context(|| format!("--budget {budget}: refused before asking {name}'s distance"))?;
+    let mut oracle = |p: &[DVec3]| -> Result<Vec<f64>, OracleError> { Ok(sdf.signed_distances(p)) };
     ui.say(format!(
         "asking {name}'s signed distance at most {} times over [{}, {}]",
         budget,

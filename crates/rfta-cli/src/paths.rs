@@ -104,7 +104,11 @@ impl Files {
         let role = role.into();
         let side = rfta_io::sidecar_path(path);
         if side != path {
-            self.add(format!("{role}'s sidecar (read for its bounds whenever it exists)"), &side, Access::Read);
+            self.add(
+                format!("{role}'s sidecar (read for its bounds whenever it exists)"),
+                &side,
+                Access::Read,
+            );
         }
         self.add(role, path, Access::Read)
     }

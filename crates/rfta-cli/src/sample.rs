@@ -4,9 +4,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use rfta_geom::Aabb;
 use rfta_geom::{Grid, TriMesh, glam::DVec3, shapes};
 use rfta_io::GridBounds;
-use rfta_geom::Aabb;
 use rfta_mesh::{MeshSdf, Topology};
 
 use crate::ui::{Ui, parse_bounds};
@@ -60,11 +60,13 @@ pub(crate) struct Args {
 pub(crate) fn as_sdf_source(mesh: &mut TriMesh, name: &str, ui: &Ui) {
     let topo = Topology::of(mesh);
     // An inside-out closed mesh has winding number -1 inside: every sample would come out
-    // positive, a grid of "outside" that describes no surface (hostile test D5).
-    if topo.is_watertight() && mesh.signed_volume() < 0.0 {
+    // positive, a grid of "outside" that describes no surface (hostile test D5). Its volume is
+    // measured near the unit: at 1e-300 it would underflow to zero, at 1e155 overflow.
+    let scale = rfta_mesh::unit_scale(mesh);
+    let volume = rfta_mesh::scaled(mesh, scale).signed_volume();
+    if topo.is_watertight() && volume < 0.0 {
         ui.say(format!(
-            "warning: {name} is inside out (its faces enclose a volume of {:.6}): sampled with its faces flipped, so that inside is negative",
-            mesh.signed_volume()
+            "warning: {name} is inside out (its faces enclose a negative volume): sampled with its faces flipped, so that inside is negative"
         ));
         mesh.flip();
     }

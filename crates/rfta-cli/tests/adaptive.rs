@@ -3,27 +3,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-
-use common::{json, rfta, s, stderr, temp};
-
-/// The built-in torus as a mesh (and its 5^3 grid, `t.npy`) in `dir`.
-fn torus_mesh(dir: &Path) -> PathBuf {
-    let torus = dir.join("torus.obj");
-    let made = rfta(&[
-        "sample",
-        "--shape",
-        "torus",
-        "--res",
-        "4",
-        "-o",
-        s(&dir.join("t.npy")),
-        "--save-mesh",
-        s(&torus),
-    ]);
-    assert!(made.status.success(), "{}", stderr(&made));
-    torus
-}
+use common::{json, rfta, s, stderr, temp, torus_mesh};
 
 /// A torus mesh's exact SDF asked at most 2,000 times: a watertight genus-1 mesh near the torus,
 /// the report's adaptive section counting the evaluations within the budget.

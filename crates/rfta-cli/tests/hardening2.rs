@@ -7,13 +7,22 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{command, rfta, s, stderr, temp};
+use common::{command, rfta, s, stderr, temp, torus_mesh};
 use rfta_geom::Grid;
 
 /// A sphere of radius 0.5 on a 13^3 grid over [-1, 1]^3, in `dir`.
 fn sphere_grid(dir: &Path) -> PathBuf {
     let path = dir.join("sph.npy");
-    let o = rfta(&["-q", "sample", "--shape", "sphere", "--res", "12", "-o", s(&path)]);
+    let o = rfta(&[
+        "-q",
+        "sample",
+        "--shape",
+        "sphere",
+        "--res",
+        "12",
+        "-o",
+        s(&path),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     path
 }
@@ -157,11 +166,14 @@ fn e5_shards_sharing_a_status_file_keep_every_record() {
         s(&status),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(
-        std::fs::read_to_string(&status).expect("status"),
-        text,
-        "nothing to add"
+    let again = std::fs::read_to_string(&status).expect("status");
+    assert!(
+        again.starts_with(&text),
+        "the records before are kept as they were"
     );
+    let added: Vec<&str> = again[text.len()..].lines().collect();
+    assert_eq!(added.len(), 3, "{again}");
+    assert!(added.iter().all(|l| l.contains(",skipped,")), "{again}");
     let _ = std::fs::remove_dir_all(dir);
 }
 
@@ -172,20 +184,28 @@ fn e6_the_place_of_the_inputs_sidecar_is_reserved() {
     let grid = sphere_grid(&dir);
     // `sample` wrote sph.json; without it, the place is reserved all the same.
     std::fs::remove_file(dir.join("sph.json")).expect("sidecar");
-    let o = reconstruct(&grid, &dir.join("m.obj"), &["--report", s(&dir.join("sph.json"))]);
+    let o = reconstruct(
+        &grid,
+        &dir.join("m.obj"),
+        &["--report", s(&dir.join("sph.json"))],
+    );
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("sidecar"), "{}", stderr(&o));
     assert!(!dir.join("sph.json").exists() && !dir.join("m.obj").exists());
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// E7: a mesh at 1e-300 and at 1e155 is sampled to the same signs as at the unit.
+/// E7: a mesh at 1e-300 and at 1e155 (inside out, as a mesh may come) is sampled to the same
+/// values, in its units, as at the unit.
 #[test]
 fn e7_meshes_of_any_scale_are_sampled_alike() {
     let dir = temp("e7");
     let mut grids: Vec<Vec<f64>> = Vec::new();
     for scale in [1.0, 1e-300, 1e155] {
-        let mesh = rfta_geom::shapes::cuboid(rfta_geom::glam::DVec3::splat(0.5 * scale));
+        // The unit cube scaled, its faces turned inward: `sample` must see that at any scale.
+        let mut mesh = rfta_geom::shapes::cuboid(rfta_geom::glam::DVec3::splat(0.5));
+        mesh.vertices.iter_mut().for_each(|v| *v *= scale);
+        mesh.flip();
         let path = dir.join(format!("cube{scale:e}.obj"));
         rfta_io::write_mesh(&path, &mesh).expect("mesh");
         let out = dir.join(format!("g{scale:e}.npy"));
@@ -292,7 +312,11 @@ fn e13_e15_adaptive_bounds_and_budgets_are_judged_before_the_work() {
         s(&out),
     ]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
-    assert!(stderr(&o).contains("does not meet the mesh"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("does not meet the mesh"),
+        "{}",
+        stderr(&o)
+    );
     let t = std::time::Instant::now();
     let o = rfta(&[
         "reconstruct",
@@ -304,7 +328,11 @@ fn e13_e15_adaptive_bounds_and_budgets_are_judged_before_the_work() {
         s(&dir.join("big.obj")),
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("refused before asking"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("refused before asking"),
+        "{}",
+        stderr(&o)
+    );
     assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -321,7 +349,13 @@ fn e14_merge_refuses_records_it_cannot_read() {
          1,b.npy,b.obj,failed,,boom,,,,,,,,\n",
     )
     .expect("status");
-    let o = rfta(&["batch", "--merge", s(&status), "--status", s(&dir.join("all.csv"))]);
+    let o = rfta(&[
+        "batch",
+        "--merge",
+        s(&status),
+        "--status",
+        s(&dir.join("all.csv")),
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("line 3"), "{}", stderr(&o));
     assert!(!dir.join("all.csv").exists());
@@ -332,26 +366,10 @@ fn e14_merge_refuses_records_it_cannot_read() {
 #[test]
 fn e16_no_piece_beyond_the_box_an_adaptive_run_sampled() {
     let dir = temp("e16");
-    let mesh = dir.join("torus.obj");
-    let o = rfta(&[
-        "-q",
-        "sample",
-        "--shape",
-        "torus",
-        "--res",
-        "4",
-        "-o",
-        s(&dir.join("t.npy")),
-        "--save-mesh",
-        s(&mesh),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let mesh = torus_mesh(&dir);
     let out = dir.join("m.obj");
     let b = [-0.9, -0.9, -0.4, 1.0, 0.9, 0.35];
-    let bounds = format!(
-        "--bounds={}",
-        b.map(|v| v.to_string()).join(",")
-    );
+    let bounds = format!("--bounds={}", b.map(|v| v.to_string()).join(","));
     let o = rfta(&[
         "reconstruct",
         "--from-mesh",
@@ -391,7 +409,11 @@ fn e17_a_mesh_beyond_the_default_box_is_sampled_whole() {
     let out = dir.join("g.npy");
     let o = rfta(&["sample", s(&mesh), "--res", "10", "-o", s(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("beyond the default box"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("beyond the default box"),
+        "{}",
+        stderr(&o)
+    );
     let raw = rfta_io::read_sdf(&out, None).expect("grid");
     let rfta_geom::Layout::Grid(g) = raw.layout else {
         panic!("a grid")
@@ -419,7 +441,10 @@ fn e18_an_inside_positive_field_is_refused_with_the_reason() {
     let o = reconstruct(&path, &dir.join("f.obj"), &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("inside-positive") && err.contains("--no-check"), "{err}");
+    assert!(
+        err.contains("inside-positive") && err.contains("--no-check"),
+        "{err}"
+    );
     assert!(!dir.join("f.obj").exists());
     let _ = std::fs::remove_dir_all(dir);
 }

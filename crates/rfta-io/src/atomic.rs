@@ -330,21 +330,42 @@ mod tests {
         let link = dir.join("linked.html");
         std::os::unix::fs::symlink("real/t.html", &link).expect("link");
         write_atomic(&link, |w| w.write_all(b"page")).expect("write");
-        assert!(std::fs::symlink_metadata(&link).expect("link").file_type().is_symlink());
-        assert_eq!(std::fs::read_to_string(dir.join("real/t.html")).expect("t"), "page");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .expect("link")
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("real/t.html")).expect("t"),
+            "page"
+        );
         // A link to a file not there yet (through a second link) creates that file.
         let dangling = dir.join("d.obj");
         std::os::unix::fs::symlink(dir.join("d2.obj"), &dangling).expect("d");
         std::os::unix::fs::symlink("real/new.obj", dir.join("d2.obj")).expect("d2");
         write_atomic(&dangling, |w| w.write_all(b"mesh")).expect("write");
-        assert_eq!(std::fs::read_to_string(dir.join("real/new.obj")).expect("new"), "mesh");
-        assert!(std::fs::symlink_metadata(&dangling).expect("d").file_type().is_symlink());
+        assert_eq!(
+            std::fs::read_to_string(dir.join("real/new.obj")).expect("new"),
+            "mesh"
+        );
+        assert!(
+            std::fs::symlink_metadata(&dangling)
+                .expect("d")
+                .file_type()
+                .is_symlink()
+        );
         // A loop of links is refused, and both links stay.
         std::os::unix::fs::symlink("b", dir.join("a")).expect("a");
         std::os::unix::fs::symlink("a", dir.join("b")).expect("b");
         let e = write_atomic(&dir.join("a"), |w| w.write_all(b"x")).expect_err("loop");
         assert!(e.to_string().contains("links"), "{e}");
-        assert!(std::fs::symlink_metadata(dir.join("a")).expect("a").file_type().is_symlink());
+        assert!(
+            std::fs::symlink_metadata(dir.join("a"))
+                .expect("a")
+                .file_type()
+                .is_symlink()
+        );
         let _ = std::fs::remove_dir_all(dir);
     }
 
@@ -368,7 +389,12 @@ mod tests {
         };
         write_atomic(&fifo, |w| w.write_all(b"{\"report\": 1}")).expect("fifo");
         assert_eq!(reader.join().expect("reader"), "{\"report\": 1}");
-        assert!(std::fs::metadata(&fifo).expect("fifo").file_type().is_fifo());
+        assert!(
+            std::fs::metadata(&fifo)
+                .expect("fifo")
+                .file_type()
+                .is_fifo()
+        );
         // A pipe of this process, by its descriptor's name; and /dev/fd/N, a link to it.
         let (mut rx, tx) = std::io::pipe().expect("pipe");
         use std::os::fd::AsRawFd;
@@ -386,7 +412,12 @@ mod tests {
         let _listener = std::os::unix::net::UnixListener::bind(&sock).expect("bind");
         let e = write_atomic(&sock, |w| w.write_all(b"x")).expect_err("socket");
         assert!(e.to_string().contains("socket"), "{e}");
-        assert!(std::fs::symlink_metadata(&sock).expect("s").file_type().is_socket());
+        assert!(
+            std::fs::symlink_metadata(&sock)
+                .expect("s")
+                .file_type()
+                .is_socket()
+        );
         let e = check_writable(&dir).expect_err("folder");
         assert!(e.to_string().contains("folder"), "{e}");
         let _ = std::fs::remove_dir_all(dir);

@@ -524,16 +524,20 @@ fn grid_headers_give_the_sample_count_without_the_data() {
     for name in ["g.npy", "g.exr"] {
         let p = dir.path(name);
         write_sdf_grid(&p, &grid, &values).expect("written");
-        assert_eq!(rfta_io::peek_sdf_len(&p).expect(name), Some(210), "{name}");
+        assert_eq!(
+            rfta_io::peek_sdf_len(&p, None).expect(name),
+            Some(210),
+            "{name}"
+        );
     }
     // (n, 4) rows count rows; text formats have no header to read.
     let rows = dir.path("rows.npy");
     let mut f = Vec::new();
     rfta_io::write_npy_f64(&mut f, &[3, 4], &[0.0; 12]).expect("npy");
     std::fs::write(&rows, f).expect("write");
-    assert_eq!(rfta_io::peek_sdf_len(&rows).expect("rows"), Some(3));
+    assert_eq!(rfta_io::peek_sdf_len(&rows, None).expect("rows"), Some(3));
     let csv = dir.write("s.csv", b"0,0,0,-1\n1,0,0,1\n");
-    assert_eq!(rfta_io::peek_sdf_len(&csv).expect("csv"), None);
+    assert_eq!(rfta_io::peek_sdf_len(&csv, None).expect("csv"), None);
     let bad = dir.write("bad.exr", b"not an exr");
-    assert!(err_text(rfta_io::peek_sdf_len(&bad)).contains("invalid OpenEXR header"));
+    assert!(err_text(rfta_io::peek_sdf_len(&bad, None)).contains("invalid OpenEXR header"));
 }

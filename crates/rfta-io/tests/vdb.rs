@@ -173,7 +173,12 @@ fn find(hay: &[u8], needle: &[u8]) -> usize {
         .filter(|(_, w)| *w == needle)
         .map(|(i, _)| i)
         .collect();
-    assert_eq!(hits.len(), 1, "test data: {needle:?} found {} times", hits.len());
+    assert_eq!(
+        hits.len(),
+        1,
+        "test data: {needle:?} found {} times",
+        hits.len()
+    );
     hits[0]
 }
 
@@ -212,7 +217,10 @@ fn a_background_that_is_not_positive_is_refused() {
             read_sdf(&path, None).expect_err("refused").to_string(),
             peek_sdf_len(&path, None).expect_err("refused").to_string(),
         ] {
-            assert!(e.contains("background value") && e.contains("not a signed distance level set"), "{e}");
+            assert!(
+                e.contains("background value") && e.contains("not a signed distance level set"),
+                "{e}"
+            );
         }
     }
 }

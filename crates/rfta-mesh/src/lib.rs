@@ -54,7 +54,7 @@ pub use components::{cavities, face_components, signed_volume};
 pub use loops::{ShortLoops, short_loops};
 pub use rfta_geom::TriMesh;
 pub use sample::{SurfaceSample, sample_surface};
-pub use scaled::MeshSdf;
+pub use scaled::{MeshSdf, scaled, unit_scale};
 pub use surgery::{cut_along, join};
 pub use topology::Topology;
 pub use union_find::UnionFind;

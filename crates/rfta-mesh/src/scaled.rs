@@ -33,37 +33,44 @@ fn exponent(x: f64) -> i32 {
     ((x.to_bits() >> 52) & 0x7ff) as i32 - 1023
 }
 
+/// The power of two that brings the largest coordinate of `mesh` near 1 (1 for a mesh whose
+/// largest coordinate is within [`SCALE_FREE`] binary orders of it): what [`MeshSdf`] measures
+/// at, and what a volume or an orientation of a mesh far from the unit is computed at.
+pub fn unit_scale(mesh: &TriMesh) -> f64 {
+    let largest = mesh
+        .vertices
+        .iter()
+        .map(|v| v.abs().max_element())
+        .fold(0.0f64, f64::max);
+    let e = if largest.is_normal() {
+        exponent(largest)
+    } else {
+        0
+    };
+    if e.abs() <= SCALE_FREE { 1.0 } else { pow2(-e) }
+}
+
+/// `mesh` with every vertex multiplied by `scale`.
+pub fn scaled(mesh: &TriMesh, scale: f64) -> TriMesh {
+    TriMesh {
+        vertices: mesh.vertices.iter().map(|&v| v * scale).collect(),
+        faces: mesh.faces.clone(),
+    }
+}
+
 impl MeshSdf {
-    /// Indexes `mesh` at the scale that brings its largest coordinate near 1.
+    /// Indexes `mesh` at the scale that brings its largest coordinate near 1 ([`unit_scale`]).
     ///
     /// # Errors
     /// As [`MeshIndex::new`].
     pub fn new(mesh: &TriMesh) -> Result<Self> {
-        let largest = mesh
-            .vertices
-            .iter()
-            .map(|v| v.abs().max_element())
-            .fold(0.0f64, f64::max);
-        let e = if largest.is_normal() {
-            exponent(largest)
+        let scale = unit_scale(mesh);
+        let index = if scale == 1.0 {
+            MeshIndex::new(mesh)?
         } else {
-            0
+            MeshIndex::new(&scaled(mesh, scale))?
         };
-        if e.abs() <= SCALE_FREE {
-            return Ok(Self {
-                index: MeshIndex::new(mesh)?,
-                scale: 1.0,
-            });
-        }
-        let scale = pow2(-e);
-        let mut scaled = mesh.clone();
-        for v in &mut scaled.vertices {
-            *v *= scale;
-        }
-        Ok(Self {
-            index: MeshIndex::new(&scaled)?,
-            scale,
-        })
+        Ok(Self { index, scale })
     }
 
     /// The mesh's bounding box, in its own units.

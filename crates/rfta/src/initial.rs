@@ -231,7 +231,12 @@ fn within_samples_box(unit: &UnitBox, cloud: TangentPoints) -> TangentPoints {
     let (lo, hi) = (unit.to_unit(b.min), unit.to_unit(b.max));
     let eps = 1e-9;
     let mut out = TangentPoints::default();
-    for ((p, n), o) in cloud.points.into_iter().zip(cloud.normals).zip(cloud.owners) {
+    for ((p, n), o) in cloud
+        .points
+        .into_iter()
+        .zip(cloud.normals)
+        .zip(cloud.owners)
+    {
         if p.cmpge(lo - eps).all() && p.cmple(hi + eps).all() {
             out.points.push(p);
             out.normals.push(n);

@@ -179,7 +179,11 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             if !path.is_file() {
                 println!("sampling {} at {}^3", a.shape, n + 1);
                 let grid = Grid::cube(n, -1.0, 1.0)?;
-                let values = index.signed_distances(&(0..grid.len()).map(|i| grid.position(i)).collect::<Vec<_>>());
+                let values = index.signed_distances(
+                    &(0..grid.len())
+                        .map(|i| grid.position(i))
+                        .collect::<Vec<_>>(),
+                );
                 rfta_io::write_sdf_grid(&path, &grid, &values)?;
             }
             inputs.push(Input {

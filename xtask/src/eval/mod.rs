@@ -558,7 +558,11 @@ pub(crate) fn grid_for(shape: &Shape, gt: &MeshIndex, n: usize) -> Result<(Grid,
         }
     }
     let grid = Grid::cube(n, -1.0, 1.0)?;
-    let values = gt.signed_distances(&(0..grid.len()).map(|i| grid.position(i)).collect::<Vec<_>>());
+    let values = gt.signed_distances(
+        &(0..grid.len())
+            .map(|i| grid.position(i))
+            .collect::<Vec<_>>(),
+    );
     Ok((grid, values))
 }
 

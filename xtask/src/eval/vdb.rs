@@ -85,7 +85,11 @@ pub(crate) fn run(shapes: &[Shape], res: &[usize], samples: usize, out: &Path) -
             let grid =
                 rfta_geom::Grid::new(dims, lo * voxel, rfta_geom::glam::DVec3::splat(voxel))?;
             let sdf = out.join(format!("{}-n{n}-sdf.npy", shape.name));
-            let values = index.signed_distances(&(0..grid.len()).map(|i| grid.position(i)).collect::<Vec<_>>());
+            let values = index.signed_distances(
+                &(0..grid.len())
+                    .map(|i| grid.position(i))
+                    .collect::<Vec<_>>(),
+            );
             let mut bytes = Vec::new();
             rfta_io::write_npy_f64(&mut bytes, &dims, &values)?;
             std::fs::write(&sdf, bytes)?;

@@ -167,8 +167,9 @@ fn run_rows(
     status_path: &Path,
     jobs: &[Job],
 ) -> Result<()> {
-    // Rows of this shard an earlier run finished are skipped; their records stay in the file
-    // (which other shards may share), and this run's rows are appended as they finish.
+    // Rows of this shard an earlier run finished are skipped (a `skipped` record appended for
+    // each); nothing in the file (which other shards may share) is rewritten, and this run's
+    // rows are appended as they finish.
     let mine: HashSet<(usize, &str, &str)> = jobs
         .iter()
         .map(|j| (j.row, j.input.as_str(), j.output.as_str()))
@@ -178,6 +179,10 @@ fn run_rows(
         .filter(|d| mine.contains(&(d.row, d.input.as_str(), d.output.as_str())))
         .collect();
     let mut status = StatusFile::open(status_path)?;
+    // Each row skipped is recorded as such, its figures kept (the last record of a row counts).
+    for d in &done {
+        status.append(d)?;
+    }
     let finished: HashSet<(usize, &str, &str)> = done
         .iter()
         .map(|d| (d.row, d.input.as_str(), d.output.as_str()))

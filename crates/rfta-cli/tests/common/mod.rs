@@ -42,3 +42,21 @@ pub(crate) fn json(path: &Path) -> serde_json::Value {
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_slice(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
+
+/// The built-in torus as a mesh (and its 5^3 grid, `t.npy`) in `dir`.
+pub(crate) fn torus_mesh(dir: &Path) -> PathBuf {
+    let torus = dir.join("torus.obj");
+    let made = rfta(&[
+        "sample",
+        "--shape",
+        "torus",
+        "--res",
+        "4",
+        "-o",
+        s(&dir.join("t.npy")),
+        "--save-mesh",
+        s(&torus),
+    ]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    torus
+}

@@ -394,7 +394,6 @@ fn read_grid_head(b: &mut Bytes<'_>) -> ParseResult<GridHead> {
     Ok(head)
 }
 
-
 /// A zlib stream (a zipped block, or a Blosc stream of the zlib codec) that must hold exactly
 /// `nbytes`; `what` names it in the error.
 fn inflate(packed: &[u8], nbytes: usize, what: &str) -> ParseResult<Vec<u8>> {

@@ -87,7 +87,8 @@ pub(super) fn judge(
     // A component wholly beyond the samples' box is where no sample was taken: the solve's
     // extrapolation (hostile test E16: a second cow-sized piece past the box an adaptive run
     // sampled), kept only where sample spheres at the box's edge need it to close their gaps.
-    if !bounds.overlaps(&unit.samples_box()) && !closes_gap(unit, &tree, main, mesh, faces, &vertices)
+    if !bounds.overlaps(&unit.samples_box())
+        && !closes_gap(unit, &tree, main, mesh, faces, &vertices)
     {
         return Some(Island::Unsupported);
     }
