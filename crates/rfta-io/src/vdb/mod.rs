@@ -386,9 +386,8 @@ fn read_grid_head(b: &mut Bytes<'_>) -> ParseResult<GridHead> {
         let kind = b.string("a metadata type")?;
         let size = b.u32("a metadata value")? as usize;
         let value = b.take(size, "a metadata value")?;
-        match (name.as_str(), kind.as_str()) {
-            ("class", "string") => head.class = String::from_utf8_lossy(value).into_owned(),
-            _ => {}
+        if (name.as_str(), kind.as_str()) == ("class", "string") {
+            head.class = String::from_utf8_lossy(value).into_owned();
         }
     }
     Ok(head)
