@@ -169,24 +169,67 @@ pub(super) fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
         if !r.complete || r.is_blank() {
             continue;
         }
-        let record = (r.fields.len() == table.columns.len())
-            .then(|| StatusRow::parse(&table, r))
-            .flatten();
-        match record {
-            Some(record) => rows.push(record),
-            None => bail!(
-                "{}: line {}: not a status record ({} fields where the header has {}; a row \
-                 number, a status of {} and the seconds as a number are needed): {}",
+        match StatusRow::parse(&table, r) {
+            Some(record) if r.fields.len() == table.columns.len() => rows.push(record),
+            _ => bail!(
+                "{}: line {}: not a status record ({}): {}",
                 path.display(),
                 r.line,
-                r.fields.len(),
-                table.columns.len(),
-                Status::ALL.map(Status::name).join(", "),
+                why_not_a_record(&table, r),
                 r.fields.join(",")
             ),
         }
     }
     Ok(rows)
+}
+
+/// The length of `file` up to the end of its last line break (its whole length when it ends
+/// with one): what a killed writer left of its last record lies beyond.
+fn complete_length(file: &File) -> std::io::Result<u64> {
+    let mut end = file.metadata()?.len();
+    let mut chunk = [0u8; 4096];
+    while end > 0 {
+        let start = end.saturating_sub(chunk.len() as u64);
+        let part = &mut chunk[..(end - start) as usize];
+        #[cfg(unix)]
+        std::os::unix::fs::FileExt::read_exact_at(file, part, start)?;
+        #[cfg(not(unix))]
+        part.fill(b'\n');
+        if let Some(i) = part.iter().rposition(|&b| b == b'\n') {
+            return Ok(start + i as u64 + 1);
+        }
+        end = start;
+    }
+    Ok(0)
+}
+
+/// What makes `row` of a status `table` no record, for the error.
+fn why_not_a_record(table: &rfta_io::table::Table, row: &rfta_io::table::Row) -> String {
+    if row.fields.len() != table.columns.len() {
+        return format!(
+            "{} fields where the header has {}",
+            row.fields.len(),
+            table.columns.len()
+        );
+    }
+    let get = |name: &str| {
+        table
+            .column(name)
+            .and_then(|i| row.fields.get(i))
+            .cloned()
+            .unwrap_or_default()
+    };
+    if get("row").parse::<usize>().is_err() {
+        return format!("the row {:?} is not a row number", get("row"));
+    }
+    if Status::parse(&get("status")).is_none() {
+        return format!(
+            "the status {:?} is none of {}",
+            get("status"),
+            Status::ALL.map(Status::name).join(", ")
+        );
+    }
+    format!("the seconds {:?} are not a number", get("seconds"))
 }
 
 /// The rows of an earlier run that need not run again: the last word on each row is `ok` or
@@ -219,8 +262,8 @@ pub(super) fn last_by_row(rows: Vec<StatusRow>) -> Vec<StatusRow> {
 
 /// A status file written a row at a time, which the shards of a job array may share: each
 /// record is appended whole under an exclusive lock of the file, after the header when the
-/// file is new and after a line break when the last line was cut short (hostile test E5: shards
-/// that each rewrote a shared file at their start lost each other's records).
+/// file is new, and after cutting off what a killed writer left of a last record (hostile test
+/// E5: shards that each rewrote a shared file at their start lost each other's records).
 pub(super) struct StatusFile {
     pub(super) file: File,
 }
@@ -240,27 +283,19 @@ impl StatusFile {
         Ok(status)
     }
 
-    /// Under the lock: the header if the file is empty, a line break if its last line has none,
-    /// then `row` if given, synced.
+    /// Under the lock: a last line left without its line break (a writer killed mid-record)
+    /// cut off, the header if the file is then empty, then `row` if given, synced.
     fn locked_append(&mut self, row: Option<&StatusRow>) -> Result<()> {
         self.file.lock()?;
         let result = (|| -> Result<()> {
-            let len = self.file.metadata()?.len();
+            let len = complete_length(&self.file)?;
+            if len < self.file.metadata()?.len() {
+                self.file.set_len(len)?;
+            }
             let mut text = String::new();
             if len == 0 {
                 text += &rfta_io::table::join_csv(&header());
                 text.push('\n');
-            } else {
-                let mut last = [0u8; 1];
-                #[cfg(unix)]
-                std::os::unix::fs::FileExt::read_exact_at(&self.file, &mut last, len - 1)?;
-                #[cfg(not(unix))]
-                {
-                    last[0] = b'\n';
-                }
-                if last[0] != b'\n' {
-                    text.push('\n');
-                }
             }
             if let Some(row) = row {
                 text += &rfta_io::table::join_csv(&row.fields());

@@ -142,3 +142,47 @@ fn bad_row_columns_are_reasons_not_errors() {
     assert_eq!(row.args, ["--bounds=-1,-1,-1,1,1,1"]);
     assert!(matches!(row.preset, Some(Preset::Fast)));
 }
+
+/// What a writer killed mid-record left (a last line without its line break) is cut off before
+/// the next record, so the two are never glued into one line; a complete line that is not a
+/// record is an error naming its line, never dropped.
+#[test]
+fn a_cut_short_record_is_cut_off_and_a_bad_record_named() {
+    let dir = std::env::temp_dir().join(format!("rfta-status-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("st.csv");
+    let record = |row: usize, status: Status| StatusRow {
+        row,
+        input: format!("i{row}.npy"),
+        output: format!("o{row}.obj"),
+        status,
+        seconds: 1.5,
+        message: String::new(),
+        figures: vec![String::new(); FIGURES.len()],
+    };
+    let mut file = StatusFile::open(&path).expect("new file");
+    file.append(&record(0, Status::Ok)).expect("append");
+    drop(file);
+    let whole = std::fs::read_to_string(&path).expect("status");
+    std::fs::write(&path, format!("{whole}1,i1.npy,o1.o")).expect("cut short");
+    let mut file = StatusFile::open(&path).expect("reopen");
+    file.append(&record(2, Status::Failed)).expect("append");
+    let rows = read_status(&path).expect("read");
+    assert_eq!(
+        rows.iter().map(|r| (r.row, r.status)).collect::<Vec<_>>(),
+        [(0, Status::Ok), (2, Status::Failed)]
+    );
+    assert_eq!(
+        std::fs::read_to_string(&path)
+            .expect("status")
+            .lines()
+            .count(),
+        3
+    );
+    let text = std::fs::read_to_string(&path).expect("status");
+    std::fs::write(&path, text.replace(",failed,1.500,", ",FAILED,1.500,")).expect("edit");
+    let e = read_status(&path).expect_err("a bad record").to_string();
+    assert!(e.contains("line 3") && e.contains("\"FAILED\""), "{e}");
+    let _ = std::fs::remove_dir_all(dir);
+}
