@@ -60,7 +60,7 @@ pub(crate) fn from_mesh(args: &Args, ui: &Ui) -> Result<()> {
     let mut params = args.tuning.params()?;
     params.clamp = args.checks.clamp;
     params.check = !args.checks.no_check;
-    params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
+    params.memory_limit = args.checks.max_memory.or_else(rfta::available_memory);
     let budget = args.budget.unwrap_or(30_000);
     rfta::check_memory(budget, &params)
         .with_context(|| format!("--budget {budget}: refused before asking {name}'s distance"))?;

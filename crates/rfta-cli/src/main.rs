@@ -91,7 +91,7 @@ fn main() -> ExitCode {
     let ui = ui::Ui::new(cli.quiet, cli.verbose);
     // No input is read past a quarter of the memory this process may use (a link to /dev/zero,
     // a huge file): the rest is for decoding it and for the work.
-    if let Some(bytes) = ui::available_memory() {
+    if let Some(bytes) = rfta::available_memory() {
         rfta_io::set_read_limit(bytes / 4);
     }
     // One cap for --threads and RAYON_NUM_THREADS: the cores here (threads beyond them only

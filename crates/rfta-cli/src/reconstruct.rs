@@ -409,7 +409,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     let mut params = args.tuning.params()?;
     params.clamp = args.checks.clamp;
     params.check = !args.checks.no_check;
-    params.memory_limit = args.checks.max_memory.or_else(crate::ui::available_memory);
+    params.memory_limit = args.checks.max_memory.or_else(rfta::available_memory);
     // Refuse an oversized grid from its header, before reading the data.
     if let Some(n) = rfta_io::peek_sdf_len(&input, args.grid.as_deref())? {
         rfta::check_memory(n, &params).with_context(|| {

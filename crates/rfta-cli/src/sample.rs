@@ -121,7 +121,7 @@ pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     // Refuse grids that cannot fit in memory before allocating (8 bytes per value, 24 per
     // position), against the memory available now (16 GiB where it cannot be read).
     let bytes = n.checked_mul(32).context("grid too large")? as u64;
-    let limit = crate::ui::available_memory().unwrap_or(16 << 30);
+    let limit = rfta::available_memory().unwrap_or(16 << 30);
     if bytes > limit {
         bail!(
             "a {}^3 grid needs about {} but {} is available; choose a smaller --res",

@@ -658,6 +658,11 @@ fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // would start that many and panic where they cannot start). An error here (the threads
     // refused) leaves rayon's own start, which reports it as it can.
     let _ = rfta::start_global_pool(None);
+    // What one input may take once read or made dense (an OpenVDB level set's box): a quarter
+    // of the memory the process can use now, as the CLI has it.
+    if let Some(bytes) = rfta::available_memory() {
+        rfta_io::set_read_limit(bytes / 4);
+    }
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("NoSurfaceError", m.py().get_type::<NoSurfaceError>())?;
     m.add_function(wrap_pyfunction!(reconstruct, m)?)?;

@@ -64,7 +64,7 @@ pub use rfta_sphere_tree as sphere_tree;
 pub use rfta_spsr as spsr;
 
 pub use consistency::Consistency;
-pub use memory::{check_memory, estimate_peak_memory, format_bytes};
+pub use memory::{available_memory, check_memory, estimate_peak_memory, format_bytes};
 pub use params::{
     CELLS_PER_SPACING, InitialPoints, MAX_THREADS, OWNER_BAND, PRESETS, Params, RASTER_REACH,
     ROUND_FULL_DEPTH, ROUND_SWEEPS, SCREENING_FULL_DEPTH, SPSR_FULL_DEPTH, SUB_CELL_LOOP, Seeds,
