@@ -242,6 +242,15 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
                     )
                 }
             );
+            let (rim_negative, rim_all) = c.rim;
+            out!(
+                "  sign        {rim_negative} of the {rim_all} samples around the set negative{}",
+                if c.looks_inside_positive() {
+                    ": looks inside-positive (reconstruct refuses it; negate the values)"
+                } else {
+                    ""
+                }
+            );
             match (raw_clamp, c.clamp) {
                 (Some(v), _) => out!("  clamped     at {v} (the file's background value)"),
                 (None, Some((v, n))) => out!("  clamped     at {v} ({n} plateau samples)"),

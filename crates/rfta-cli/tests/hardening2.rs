@@ -425,8 +425,8 @@ fn e17_a_mesh_beyond_the_default_box_is_sampled_whole() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// E18: an inside-positive field is refused with the reason and the way out; negated, the
-/// same samples reconstruct.
+/// E18: an inside-positive field is refused with the reason and the way out, and `info` says
+/// it; the field as it was is not.
 #[test]
 fn e18_an_inside_positive_field_is_refused_with_the_reason() {
     let dir = temp("e18");
@@ -446,5 +446,17 @@ fn e18_an_inside_positive_field_is_refused_with_the_reason() {
         "{err}"
     );
     assert!(!dir.join("f.obj").exists());
+    // `info` says so too, and not of the field as it was.
+    let said = |p: &Path| String::from_utf8_lossy(&rfta(&["info", s(p)]).stdout).into_owned();
+    assert!(
+        said(&path).contains("looks inside-positive"),
+        "{}",
+        said(&path)
+    );
+    assert!(
+        !said(&grid).contains("looks inside-positive"),
+        "{}",
+        said(&grid)
+    );
     let _ = std::fs::remove_dir_all(dir);
 }

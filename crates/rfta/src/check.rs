@@ -66,18 +66,27 @@ pub struct Inspection {
     /// The samples on the outside of the set (a grid's outer faces; otherwise the twentieth
     /// farthest from the centre of their box): `(negative, all)` of them, zeros left out.
     pub rim: (usize, usize),
+    /// Samples above zero.
+    pub positive: usize,
 }
 
 /// The share of the rim's samples ([`Inspection::rim`]) that must be negative, with positive
 /// samples within, for the field to look inside-positive: a shape sampled in a box around it
 /// has positive values all around.
-pub const FLIPPED_RIM: f64 = 0.95;
+const FLIPPED_RIM: f64 = 0.95;
 
 /// Excess over the 1-Lipschitz bound (or the separation bound) beyond this fraction of the values
 /// is not counted as noise (the separation test judges such fields).
 pub const MAX_NOISE: f64 = 0.25;
 
 impl Inspection {
+    /// Whether the field looks inside-positive: at least [`FLIPPED_RIM`] of the samples around
+    /// the set ([`Inspection::rim`]) are negative, around positive ones.
+    pub fn looks_inside_positive(&self) -> bool {
+        let (negative, all) = self.rim;
+        self.positive > 0 && all > 0 && negative as f64 >= FLIPPED_RIM * all as f64
+    }
+
     /// The fraction of checked samples that are inconsistent.
     pub fn inconsistent_fraction(&self) -> f64 {
         self.inconsistent as f64 / self.checked.max(1) as f64
@@ -163,6 +172,7 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
     out.clamp = detect_clamp(samples);
     out.lipschitz_excess = lipschitz_excess(samples);
     out.rim = rim(samples);
+    out.positive = pos.len();
     out
 }
 
@@ -352,8 +362,7 @@ pub(crate) fn samples(
     // other convention, and reconstructing it as it is turns the mesh inside out and breaks it
     // (hostile test E18: six pieces, 9,121 samples on the wrong side, no word).
     let (rim_negative, rim_all) = found.rim;
-    let has_positive = samples.values().iter().any(|&v| v > 0.0);
-    if has_positive && rim_all > 0 && rim_negative as f64 >= FLIPPED_RIM * rim_all as f64 {
+    if found.looks_inside_positive() {
         return Err(Error::NotADistance(format!(
             "the field looks inside-positive: {rim_negative} of the {rim_all} samples on the outside of the set are negative (inside), around positive ones; rfta takes negative values as inside (as gpytoolbox and OpenVDB do), so negate the values. If the shape truly fills the box around a void, turn the check off"
         )));
