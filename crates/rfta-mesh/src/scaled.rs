@@ -2,7 +2,7 @@
 //! 1e155) is measured at a power-of-two scale near 1, where squared distances neither underflow
 //! to zero nor overflow to infinity (hostile test E7: an all-zero grid at 1e-300, NaN at 1e155).
 //! Multiplying by a power of two is exact in floating point, so a mesh whose coordinates are
-//! within [`SCALE_FREE`] of the unit is measured exactly as [`MeshIndex`] measures it.
+//! within 2^-64 to 2^64 of the unit is measured exactly as [`MeshIndex`] measures it.
 
 use rayon::prelude::*;
 use rfta_geom::{Aabb, Grid, TriMesh, glam::DVec3};
@@ -34,7 +34,7 @@ fn exponent(x: f64) -> i32 {
 }
 
 /// The power of two that brings the largest coordinate of `mesh` near 1 (1 for a mesh whose
-/// largest coordinate is within [`SCALE_FREE`] binary orders of it): what [`MeshSdf`] measures
+/// largest coordinate is within 64 binary orders of it): what [`MeshSdf`] measures
 /// at, and what a volume or an orientation of a mesh far from the unit is computed at.
 pub fn unit_scale(mesh: &TriMesh) -> f64 {
     let largest = mesh

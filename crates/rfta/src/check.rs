@@ -80,7 +80,7 @@ const FLIPPED_RIM: f64 = 0.95;
 pub const MAX_NOISE: f64 = 0.25;
 
 impl Inspection {
-    /// Whether the field looks inside-positive: at least [`FLIPPED_RIM`] of the samples around
+    /// Whether the field looks inside-positive: at least 95% of the samples around
     /// the set ([`Inspection::rim`]) are negative, around positive ones.
     pub fn looks_inside_positive(&self) -> bool {
         let (negative, all) = self.rim;
