@@ -27,6 +27,25 @@ fn sphere_grid(dir: &Path) -> PathBuf {
     path
 }
 
+/// A disk of radius 0.5 on a 17^2 grid over [-1, 1]^2 as `NAME.npy` in `dir`, its values
+/// times `sign`.
+fn disk_grid(dir: &Path, name: &str, sign: f64) -> PathBuf {
+    let grid = rfta::geom::plane::Grid2::from_bounds(
+        [17, 17],
+        rfta::geom::glam::DVec2::splat(-1.0),
+        rfta::geom::glam::DVec2::splat(1.0),
+    )
+    .expect("grid");
+    let values: Vec<f64> = (0..grid.len())
+        .map(|i| sign * (grid.position(i).length() - 0.5))
+        .collect();
+    let path = dir.join(format!("{name}.npy"));
+    let mut bytes = Vec::new();
+    rfta_io::write_npy_f64(&mut bytes, &[17, 17], &values).expect("npy");
+    std::fs::write(&path, bytes).expect("npy");
+    path
+}
+
 /// `rfta reconstruct GRID -o OUT` with one fine-tuning round and `extra`.
 fn reconstruct(grid: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec!["reconstruct", s(grid), "-o", s(out), "--rounds", "1"];
@@ -247,19 +266,7 @@ fn e8_one_signed_samples_covering_their_box_are_no_surface() {
 #[test]
 fn e10_html_for_2d_input_writes_a_page() {
     let dir = temp("e10");
-    let grid = rfta::geom::plane::Grid2::from_bounds(
-        [17, 17],
-        rfta::geom::glam::DVec2::splat(-1.0),
-        rfta::geom::glam::DVec2::splat(1.0),
-    )
-    .expect("grid");
-    let values: Vec<f64> = (0..grid.len())
-        .map(|i| grid.position(i).length() - 0.5)
-        .collect();
-    let path = dir.join("disk.npy");
-    let mut bytes = Vec::new();
-    rfta_io::write_npy_f64(&mut bytes, &[17, 17], &values).expect("npy");
-    std::fs::write(&path, bytes).expect("npy");
+    let path = disk_grid(&dir, "disk", 1.0);
     let page = dir.join("disk.html");
     let o = reconstruct(&path, &dir.join("disk.svg"), &["--html", s(&page)]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -426,7 +433,7 @@ fn e17_a_mesh_beyond_the_default_box_is_sampled_whole() {
 }
 
 /// E18: an inside-positive field is refused with the reason and the way out, and `info` says
-/// it; the field as it was is not.
+/// it; the field as it was is not; the same in 2D.
 #[test]
 fn e18_an_inside_positive_field_is_refused_with_the_reason() {
     let dir = temp("e18");
@@ -458,5 +465,13 @@ fn e18_an_inside_positive_field_is_refused_with_the_reason() {
         "{}",
         said(&grid)
     );
+    // The same rule in 2D: a disk's field negated is refused, the disk's reconstructs.
+    let disk = disk_grid(&dir, "disk", 1.0);
+    let flipped = disk_grid(&dir, "flipped2d", -1.0);
+    let o = reconstruct(&flipped, &dir.join("f.svg"), &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("inside-positive"), "{}", stderr(&o));
+    let o = reconstruct(&disk, &dir.join("d.svg"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -83,8 +83,7 @@ impl Inspection {
     /// Whether the field looks inside-positive: at least 95% of the samples around
     /// the set ([`Inspection::rim`]) are negative, around positive ones.
     pub fn looks_inside_positive(&self) -> bool {
-        let (negative, all) = self.rim;
-        self.positive > 0 && all > 0 && negative as f64 >= FLIPPED_RIM * all as f64
+        looks_flipped(self.rim, self.positive)
     }
 
     /// The fraction of checked samples that are inconsistent.
@@ -176,32 +175,53 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
     out
 }
 
-/// [`Inspection::rim`].
-fn rim(samples: &SdfSamples) -> (usize, usize) {
-    let values = samples.values();
-    let on_rim: Vec<usize> = match samples.as_grid() {
-        Some(grid) => {
-            let [nx, ny, nz] = grid.dims();
-            (0..values.len())
-                .filter(|&i| {
-                    let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
-                    x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz
-                })
-                .collect()
-        }
-        None => {
-            let c = samples.bounds().center();
-            let mut by_distance: Vec<(f64, usize)> = (0..values.len())
-                .map(|i| (samples.position(i).distance_squared(c), i))
-                .collect();
-            by_distance.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-            let take = (values.len() / 20).max(8).min(values.len());
-            by_distance[..take].iter().map(|&(_, i)| i).collect()
-        }
-    };
+/// Whether a field whose rim has `(negative, all)` samples (zeros left out) and `positive`
+/// samples above zero looks inside-positive (2D and 3D alike).
+pub(crate) fn looks_flipped((negative, all): (usize, usize), positive: usize) -> bool {
+    positive > 0 && all > 0 && negative as f64 >= FLIPPED_RIM * all as f64
+}
+
+/// The refusal of a field that [`looks_flipped`], naming the flag that turns the check off.
+pub(crate) fn flipped((negative, all): (usize, usize)) -> Error {
+    Error::NotADistance(format!(
+        "the field looks inside-positive: {negative} of the {all} samples on the outside of the set are negative (inside), around positive ones; rfta takes negative values as inside (as gpytoolbox and OpenVDB do), so negate the values. If the shape truly fills the box around a void, turn the check off"
+    ))
+}
+
+/// The rim of scattered samples: the twentieth of the `n` samples farthest from their box's
+/// centre (at least 8), by `distance_squared`; then `(negative, all)` of them, zeros left out.
+pub(crate) fn rim_of(
+    values: &[f64],
+    on_rim: Option<Vec<usize>>,
+    distance_squared: impl Fn(usize) -> f64,
+) -> (usize, usize) {
+    let on_rim = on_rim.unwrap_or_else(|| {
+        let mut by_distance: Vec<(f64, usize)> = (0..values.len())
+            .map(|i| (distance_squared(i), i))
+            .collect();
+        by_distance.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let take = (values.len() / 20).max(8).min(values.len());
+        by_distance[..take].iter().map(|&(_, i)| i).collect()
+    });
     let negative = on_rim.iter().filter(|&&i| values[i] < 0.0).count();
     let all = on_rim.iter().filter(|&&i| values[i] != 0.0).count();
     (negative, all)
+}
+
+/// [`Inspection::rim`].
+fn rim(samples: &SdfSamples) -> (usize, usize) {
+    let values = samples.values();
+    let on_grid = samples.as_grid().map(|grid| {
+        let [nx, ny, nz] = grid.dims();
+        (0..values.len())
+            .filter(|&i| {
+                let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
+                x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz
+            })
+            .collect()
+    });
+    let c = samples.bounds().center();
+    rim_of(values, on_grid, |i| samples.position(i).distance_squared(c))
 }
 
 /// [`Inspection::lipschitz_excess`] (0 for scattered samples).
@@ -361,11 +381,8 @@ pub(crate) fn samples(
     // outside is negative all around, with positive samples within, is most likely of the
     // other convention, and reconstructing it as it is turns the mesh inside out and breaks it
     // (hostile test E18: six pieces, 9,121 samples on the wrong side, no word).
-    let (rim_negative, rim_all) = found.rim;
     if found.looks_inside_positive() {
-        return Err(Error::NotADistance(format!(
-            "the field looks inside-positive: {rim_negative} of the {rim_all} samples on the outside of the set are negative (inside), around positive ones; rfta takes negative values as inside (as gpytoolbox and OpenVDB do), so negate the values. If the shape truly fills the box around a void, turn the check off"
-        )));
+        return Err(flipped(found.rim));
     }
     if let Some(&i) = found
         .beyond_extent

@@ -102,6 +102,7 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
     let start = Instant::now();
     if params.check {
         check_separation(samples, params.max_inconsistent)?;
+        check_sign_convention(samples)?;
     }
     let UnitSquare {
         lo,
@@ -326,6 +327,33 @@ fn solve_domain(cloud: &rfta_plane::arcs::Owners, circles: &[Circle], extent: DV
 /// of the distance is an occupancy image or a field in other units than the positions, and
 /// reconstructing from it gives a wrong curve or none. (The 3D check also detects clamps and
 /// measures noise; in 2D this is the whole check.)
+/// Refuses an inside-positive field as the 3D check does ([`crate::check::looks_flipped`]): the
+/// samples around the set (a grid's outer rows and columns; otherwise the twentieth farthest from
+/// the centre of their box) nearly all negative, around positive ones.
+fn check_sign_convention(samples: &Samples2) -> Result<()> {
+    let (p, v) = (samples.positions(), samples.values());
+    let on_grid = samples.as_grid().map(|g| {
+        let [nx, ny] = g.dims();
+        (0..v.len())
+            .filter(|&i| {
+                let (x, y) = (i / ny, i % ny);
+                x == 0 || y == 0 || x + 1 == nx || y + 1 == ny
+            })
+            .collect()
+    });
+    let (lo, hi) = p.iter().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &q| (lo.min(q), hi.max(q)),
+    );
+    let c = (lo + hi) / 2.0;
+    let rim = crate::check::rim_of(v, on_grid, |i| p[i].distance_squared(c));
+    let positive = v.iter().filter(|&&x| x > 0.0).count();
+    if crate::check::looks_flipped(rim, positive) {
+        return Err(crate::check::flipped(rim));
+    }
+    Ok(())
+}
+
 fn check_separation(samples: &Samples2, max_fraction: f64) -> Result<()> {
     use kiddo::{ImmutableKdTree, SquaredEuclidean};
     use rayon::prelude::*;
