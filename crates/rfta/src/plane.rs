@@ -334,17 +334,17 @@ fn check_sign_convention(samples: &Samples2) -> Result<()> {
     let (p, v) = (samples.positions(), samples.values());
     let on_grid = samples.as_grid().map(|g| {
         let [nx, ny] = g.dims();
-        (0..v.len())
-            .filter(|&i| {
-                let (x, y) = (i / ny, i % ny);
-                x == 0 || y == 0 || x + 1 == nx || y + 1 == ny
-            })
-            .collect()
+        // The first and last columns whole, the first and last rows between them.
+        let columns = [0, nx - 1]
+            .into_iter()
+            .flat_map(move |x| (0..ny).map(move |y| (x, y)));
+        let rows = (1..nx.saturating_sub(1)).flat_map(move |x| [(x, 0), (x, ny - 1)]);
+        let mut rim: Vec<usize> = columns.chain(rows).map(|(x, y)| g.index(x, y)).collect();
+        rim.sort_unstable();
+        rim.dedup();
+        rim
     });
-    let (lo, hi) = p.iter().fold(
-        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &q| (lo.min(q), hi.max(q)),
-    );
+    let (lo, hi) = samples.bounds();
     let c = (lo + hi) / 2.0;
     let rim = crate::check::rim_of(v, on_grid, |i| p[i].distance_squared(c));
     let positive = v.iter().filter(|&&x| x > 0.0).count();

@@ -104,7 +104,7 @@ use manifest::*;
 use runner::*;
 use status::*;
 
-pub(crate) fn run(args: Args, threads: Option<usize>, ui: &Ui) -> Result<()> {
+pub(crate) fn run(args: Args, threads: usize, ui: &Ui) -> Result<()> {
     if !args.merge.is_empty() {
         return merge(&args.merge, args.status.as_deref());
     }
@@ -161,7 +161,7 @@ fn shard_rows(args: &Args, manifest: &Path) -> Result<(PathBuf, PathBuf, Vec<Job
 /// finishes.
 fn run_rows(
     args: &Args,
-    threads: Option<usize>,
+    threads: usize,
     ui: &Ui,
     base: &Path,
     status_path: &Path,
@@ -191,9 +191,8 @@ fn run_rows(
         .iter()
         .filter(|j| !finished.contains(&(j.row, j.input.as_str(), j.output.as_str())))
         .collect();
-    let cores = threads.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
-    });
+    // The process's threads (--threads or RAYON_NUM_THREADS, at most the cores).
+    let cores = threads;
     let n_jobs = (args.jobs as usize).min(todo.len()).max(1);
     let per_row = (cores / n_jobs).max(1);
     if n_jobs * per_row > cores {

@@ -114,17 +114,46 @@ impl StatusRow {
         .collect()
     }
 
-    /// The record on `row` of a status `table`, as written (fields untrimmed, empty ones kept).
-    pub(super) fn parse(table: &rfta_io::table::Table, row: &rfta_io::table::Row) -> Option<Self> {
-        let get = |name: &str| table.column(name).and_then(|i| row.fields.get(i)).cloned();
-        Some(Self {
-            row: get("row")?.parse().ok()?,
-            input: get("input")?,
-            output: get("output")?,
-            status: Status::parse(&get("status")?)?,
-            seconds: get("seconds")?.parse().ok()?,
-            message: get("message").unwrap_or_default(),
-            figures: FIGURES.iter().map(|f| get(f).unwrap_or_default()).collect(),
+    /// The record on `row` of a status `table`, as written (fields untrimmed, empty ones kept),
+    /// or why it is none.
+    pub(super) fn parse(
+        table: &rfta_io::table::Table,
+        row: &rfta_io::table::Row,
+    ) -> std::result::Result<Self, String> {
+        if row.fields.len() != table.columns.len() {
+            return Err(format!(
+                "{} fields where the header has {}",
+                row.fields.len(),
+                table.columns.len()
+            ));
+        }
+        let get = |name: &str| {
+            table
+                .column(name)
+                .and_then(|i| row.fields.get(i))
+                .cloned()
+                .unwrap_or_default()
+        };
+        let number = get("row");
+        let status = get("status");
+        let seconds = get("seconds");
+        Ok(Self {
+            row: number
+                .parse()
+                .map_err(|_| format!("the row {number:?} is not a row number"))?,
+            input: get("input"),
+            output: get("output"),
+            status: Status::parse(&status).ok_or_else(|| {
+                format!(
+                    "the status {status:?} is none of {}",
+                    Status::ALL.map(Status::name).join(", ")
+                )
+            })?,
+            seconds: seconds
+                .parse()
+                .map_err(|_| format!("the seconds {seconds:?} are not a number"))?,
+            message: get("message"),
+            figures: FIGURES.iter().map(|f| get(f)).collect(),
         })
     }
 }
@@ -170,12 +199,11 @@ pub(super) fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
             continue;
         }
         match StatusRow::parse(&table, r) {
-            Some(record) if r.fields.len() == table.columns.len() => rows.push(record),
-            _ => bail!(
-                "{}: line {}: not a status record ({}): {}",
+            Ok(record) => rows.push(record),
+            Err(why) => bail!(
+                "{}: line {}: not a status record ({why}): {}",
                 path.display(),
                 r.line,
-                why_not_a_record(&table, r),
                 r.fields.join(",")
             ),
         }
@@ -201,35 +229,6 @@ fn complete_length(file: &File) -> std::io::Result<u64> {
         end = start;
     }
     Ok(0)
-}
-
-/// What makes `row` of a status `table` no record, for the error.
-fn why_not_a_record(table: &rfta_io::table::Table, row: &rfta_io::table::Row) -> String {
-    if row.fields.len() != table.columns.len() {
-        return format!(
-            "{} fields where the header has {}",
-            row.fields.len(),
-            table.columns.len()
-        );
-    }
-    let get = |name: &str| {
-        table
-            .column(name)
-            .and_then(|i| row.fields.get(i))
-            .cloned()
-            .unwrap_or_default()
-    };
-    if get("row").parse::<usize>().is_err() {
-        return format!("the row {:?} is not a row number", get("row"));
-    }
-    if Status::parse(&get("status")).is_none() {
-        return format!(
-            "the status {:?} is none of {}",
-            get("status"),
-            Status::ALL.map(Status::name).join(", ")
-        );
-    }
-    format!("the seconds {:?} are not a number", get("seconds"))
 }
 
 /// The rows of an earlier run that need not run again: the last word on each row is `ok` or
