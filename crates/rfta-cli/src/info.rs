@@ -232,7 +232,7 @@ fn describe_sdf(path: &Path, raw: RawSdf) -> Result<()> {
                 c.checked,
                 100.0 * c.inconsistent_fraction(),
                 c.severe,
-                rfta::check::SEVERE_RATIO,
+                c.severe_ratio(),
                 if c.beyond_extent.is_empty() {
                     String::new()
                 } else {

@@ -273,83 +273,10 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     for (stage, t) in &r.timings {
         ui.detail(format!("  {stage}: {:.3} s", t.as_secs_f64()));
     }
-    if r.repair.islands_removed > 0 {
-        ui.detail(format!(
-            "removed {} small closed island(s) that no sample witnesses",
-            r.repair.islands_removed
-        ));
+    for change in r.changes() {
+        ui.detail(change);
     }
-    if r.repair.unsupported_removed > 0 {
-        ui.detail(format!(
-            "removed {} component(s) the samples contradict (inside sample spheres, or an inward-facing shell around nothing)",
-            r.repair.unsupported_removed
-        ));
-    }
-    if r.repair.sub_cell_handles_cut > 0 {
-        ui.detail(format!(
-            "cut {} handle(s) whose loop is shorter than {} of the final solve's cells (side {:.3e}): threads or pinholes where its function has a saddle at the iso-value",
-            r.repair.sub_cell_handles_cut,
-            rfta::SUB_CELL_LOOP,
-            r.final_solve.finest_cell
-        ));
-    }
-    if r.final_solve.side_errors.len() > 1 {
-        ui.detail(format!(
-            "the final solve put {} samples on the wrong side of (or at) its surface; re-solved with them screened toward their side: {}",
-            r.final_solve.side_errors[0],
-            r.final_solve.side_errors[1..]
-                .iter()
-                .map(|n| n.to_string())
-                .collect::<Vec<_>>()
-                .join(", then ")
-        ));
-    }
-    if r.repair.vertices_pushed_out > 0 {
-        ui.detail(format!(
-            "moved {} vertices out of the sample spheres they entered ({} of them added where a face cut a sphere with no vertex inside)",
-            r.repair.vertices_pushed_out, r.repair.vertices_added
-        ));
-    }
-    if r.repair.dents > 0 {
-        ui.detail(format!(
-            "split {} faces that cut a small sample sphere with the sample on the wrong side, and dented them past it",
-            r.repair.dents
-        ));
-    }
-    if r.repair.cavities_opened > 0 {
-        ui.detail(format!(
-            "opened {} cavit{} the surface had sealed around outside samples (a gap or a hole the samples leave open)",
-            r.repair.cavities_opened,
-            if r.repair.cavities_opened == 1 { "y" } else { "ies" }
-        ));
-    }
-    if r.repair.small_components_asked + r.repair.thin_handles_asked > 0 {
-        ui.say(format!(
-            "asked the SDF about {} small component(s) and {} thin handle(s): removed {} and cut {} it contradicts",
-            r.repair.small_components_asked,
-            r.repair.thin_handles_asked,
-            r.repair.small_components_removed,
-            r.repair.thin_handles_cut
-        ));
-    }
-    if r.repair.components_joined + r.repair.handles_cut > 0 {
-        ui.say(format!(
-            "to reach the genus asked: joined {} component(s) to the largest, cut {} handle(s)",
-            r.repair.components_joined, r.repair.handles_cut
-        ));
-    }
-    let c = &r.consistency;
-    ui.detail(format!(
-        "agreement with the {} samples (h = {:.4}): {} on the wrong side, {} spheres entered by more than {} h (deepest {:.2} h), {} gaps over {} h",
-        c.samples,
-        c.spacing,
-        c.sign_errors,
-        c.entered,
-        rfta::consistency::ENTER_MARGIN,
-        c.deepest_entry,
-        c.gaps,
-        rfta::consistency::GAP_MARGIN
-    ));
+    ui.detail(r.agreement());
     if let Some(why) = &r.rounds.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));
     }

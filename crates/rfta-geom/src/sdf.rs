@@ -250,7 +250,7 @@ pub struct SdfSamples {
 
 impl SdfSamples {
     /// The smallest number of samples accepted.
-    pub const MIN_SAMPLES: usize = 2;
+    pub(crate) const MIN_SAMPLES: usize = 2;
 
     /// Samples on a grid; `values[grid.index(i, j, k)]` is the value at point `(i, j, k)`.
     ///

@@ -21,7 +21,7 @@
 use std::sync::OnceLock;
 
 /// The 12 cube edges as corner pairs (corner bits: x = 1, y = 2, z = 4), low corner first.
-pub const EDGES: [(u8, u8); 12] = [
+pub(crate) const EDGES: [(u8, u8); 12] = [
     (0, 1),
     (2, 3),
     (4, 5),

@@ -26,7 +26,7 @@ pub struct Opened {
 
 /// A channel's half width in spacings, at most (half the way to the ends of the edges it cuts,
 /// if less).
-pub const CHANNEL_HALF_WIDTH: f64 = 0.05;
+pub(crate) const CHANNEL_HALF_WIDTH: f64 = 0.05;
 
 /// Opens the holes of the closed curve `curve` that enclose outside samples of `grid` walled off
 /// by less than a spacing (module documentation). `values[i]` is the sample at

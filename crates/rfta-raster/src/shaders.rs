@@ -3,7 +3,7 @@
 //! `cargo xtask shaders` and this crate's tests validate them with naga.
 
 /// Sphere occupancy on the integer lattice: entry point `raster_spheres`.
-pub const RASTER_SPHERES: &str = include_str!("../../../shaders/raster_spheres.wgsl");
+pub(crate) const RASTER_SPHERES: &str = include_str!("../../../shaders/raster_spheres.wgsl");
 
 /// Every shader with its file name, for validation.
 pub const ALL: &[(&str, &str)] = &[("raster_spheres.wgsl", RASTER_SPHERES)];

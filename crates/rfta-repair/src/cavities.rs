@@ -31,7 +31,7 @@ pub struct Openings {
     /// The grid edges from an outside sample in a cavity to an outside sample beyond the mesh
     /// (sphere indices), in the order of the cavities, then of the samples.
     pub edges: Vec<[usize; 2]>,
-    /// Points in the spheres' frame that the surface should leave outside: [`GAP_POINTS`] per
+    /// Points in the spheres' frame that the surface should leave outside: `GAP_POINTS` per
     /// edge, spread over the gap between the two spheres (where they overlap, at the point
     /// between them), edge by edge.
     pub points: Vec<DVec3>,
@@ -39,7 +39,7 @@ pub struct Openings {
 
 /// Points per opened edge, at these fractions of the gap between the two spheres: one in the
 /// middle held a wall open on most of the dev shapes, three on all but the coarsest.
-pub const GAP_POINTS: [f64; 3] = [0.25, 0.5, 0.75];
+pub(crate) const GAP_POINTS: [f64; 3] = [0.25, 0.5, 0.75];
 
 /// The openings of `mesh`'s cavities (closed, outward-oriented `mesh`, in its own coordinates;
 /// `spheres` in `grid` order, `grid` the samples' grid in any frame: only its index order is

@@ -9,19 +9,14 @@ use rfta_sphere_tree::SphereTree;
 use crate::Spheres;
 use crate::edit::{Incidence, Splitter, apply_moves};
 
-/// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
-/// margin at which the consistency check (`rfta::consistency`) counts a sphere as entered, and large enough that the
-/// sphere tree prunes the many spheres the surface merely touches.
-pub const PUSH_DEPTH: f64 = 0.02;
-
 /// Passes of [`push_out_of_spheres`] per vertex: leaving the deepest sphere can land a vertex in
 /// a neighbour, which the next pass leaves in turn.
-pub const PUSH_PASSES: usize = 8;
+pub(crate) const PUSH_PASSES: usize = 8;
 
 /// The surface may not enter a sample sphere (Sellán et al. 2024, §3), yet the final screened
 /// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners,
 /// thin parts). Each vertex inside some sphere by more than `depth` (in the spheres' frame) moves radially onto
-/// the boundary of the sphere it is deepest in, up to [`PUSH_PASSES`] times; the connectivity
+/// the boundary of the sphere it is deepest in, up to `PUSH_PASSES` (8) times; the connectivity
 /// stays, and the moves are taken without folding the surface ([`apply_moves`]). The targets do
 /// not depend on one another, so the result does not depend on the thread count.
 pub fn push_out_of_spheres(
@@ -58,19 +53,11 @@ pub fn push_out_of_spheres(
 
 /// Rounds of [`clear_spheres`]: each finds the spheres the mesh still enters and moves the
 /// vertices inside them out.
-pub const CLEAR_ROUNDS: usize = 6;
-
-/// [`clear_spheres`] looks at spheres smaller than this many owner radii (`rfta::Params::owner_band`
-/// spacings on grids). A wider sphere tangent at the same point along the same normal enters a
-/// bulge at most by a few hundredths of a spacing more (a bulge `w` wide enters a sphere of
-/// radius `t` by about its height less `w^2 / 2t`): below the margin at which
-/// the consistency check (`rfta::consistency`) counts an entry, where the many far spheres' queries would cost most
-/// (nine in ten of the 129^3 bunny's samples).
-pub const CLEAR_BELOW: f64 = 3.0;
+pub(crate) const CLEAR_ROUNDS: usize = 6;
 
 /// The farthest a vertex moves in [`clear_spheres`], in sample spacings: an entry deeper than
 /// this is not a smooth surface's overshoot but a wrong part, which moving vertices would tear.
-pub const CLEAR_REACH: f64 = 0.5;
+pub(crate) const CLEAR_REACH: f64 = 0.5;
 
 /// The mesh in the spheres' frame.
 pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
@@ -95,9 +82,9 @@ pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
 /// point nearest the centre (`split_where_entered`). Then each vertex inside entered spheres
 /// moves along its normal (inward out of positive spheres, outward out of negative ones) or
 /// radially away from the deepest sphere's centre, whichever leaves all of them sooner
-/// (`leave_along`), as long as that is within [`CLEAR_REACH`] and meets no sphere of the other
+/// (`leave_along`), as long as that is within `CLEAR_REACH` (0.5) and meets no sphere of the other
 /// sign; the moves are taken without folding the surface ([`apply_moves`]). At most
-/// [`CLEAR_ROUNDS`] rounds. Vertices move in index order, so the result does not depend on the
+/// `CLEAR_ROUNDS` (6) rounds. Vertices move in index order, so the result does not depend on the
 /// thread count. Returns how many vertices were added.
 pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, depth: f64) -> usize {
     use rayon::prelude::*;

@@ -6,12 +6,12 @@ use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
 /// How many times [`apply_moves`] goes over the vertices.
-pub const MOVE_SWEEPS: usize = 8;
+pub(crate) const MOVE_SWEEPS: usize = 8;
 
 /// Moves each vertex towards its `moved_to` position where it has one without folding the
 /// surface: in index order, each takes the largest of its whole remaining move, half, a quarter
 /// or an eighth of it that turns none of its faces over (a face's normal against the one it had),
-/// given where its neighbours are by then; [`MOVE_SWEEPS`] sweeps, so that a vertex held back by
+/// given where its neighbours are by then; `MOVE_SWEEPS` (8) sweeps, so that a vertex held back by
 /// a neighbour (at sharp features the faces can be a fiftieth of a spacing across) follows it.
 /// `incident` holds the mesh's faces around each vertex. Returns the vertices that moved.
 pub fn apply_moves(

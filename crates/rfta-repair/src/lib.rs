@@ -46,13 +46,10 @@ mod tunnel;
 use rfta_geom::Sphere;
 use rfta_geom::glam::DVec3;
 
-pub use cavities::{GAP_POINTS, Openings, cavity_openings};
-pub use clear::{
-    CLEAR_BELOW, CLEAR_REACH, CLEAR_ROUNDS, PUSH_DEPTH, PUSH_PASSES, clear_spheres,
-    push_out_of_spheres,
-};
+pub use cavities::{Openings, cavity_openings};
+pub use clear::{clear_spheres, push_out_of_spheres};
 pub use components::{Island, remove_islands};
-pub use dent::{DENT_BELOW, DENT_MARGIN, dent_wrong_side};
+pub use dent::dent_wrong_side;
 pub use edit::apply_moves;
 pub use genus::{CUT_GAP, cut_disjoint, cut_sub_cell_handles, to_genus};
 pub use rfta_mesh::{face_components, signed_volume};

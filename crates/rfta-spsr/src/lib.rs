@@ -51,19 +51,14 @@ mod run;
 mod sides;
 mod solve;
 mod tree;
-mod workspace;
 
 use std::time::Duration;
 
-use run::{Keep, run};
+use run::run;
 
 /// The types of this crate's API, so that depending on `rfta-spsr` alone is enough.
 pub use rfta_geom::{OrientedPoints, TriMesh, glam};
-pub use sides::{
-    SIDE_MARGIN, SIDE_PASSES, SIDE_RECHECK, SIDE_RESOLVE_SWEEPS, SIDE_TARGET, SIDE_WEIGHT,
-    SIDE_WEIGHT_GROWTH, SidePoint, SideSet,
-};
-pub use workspace::Workspace;
+pub use sides::{SidePoint, SideSet};
 
 /// Errors of the reconstruction. Each says what is wrong with the input or the parameters.
 #[derive(Debug, thiserror::Error)]
@@ -94,16 +89,6 @@ pub enum Error {
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, Error>;
 
-/// B-spline degree of the finite elements.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[non_exhaustive]
-pub enum Degree {
-    /// Trilinear hats on cell corners (27-entry rows): PoissonRecon's default since version 11 and
-    /// what Reach for the Arcs runs. Degree 2 is not implemented.
-    #[default]
-    One,
-}
-
 /// Boundary condition on the faces of the reconstruction cube.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Boundary {
@@ -114,7 +99,8 @@ pub enum Boundary {
     Dirichlet,
 }
 
-/// Parameters. The defaults are PoissonRecon 18's (`--depth 8 --pointWeight 2 --degree 1
+/// Parameters. The finite elements are degree-1 B-splines (trilinear hats on cell corners,
+/// PoissonRecon's default since version 11). The defaults are PoissonRecon 18's (`--depth 8 --pointWeight 2 --degree 1
 /// --bType 3 --scale 1.1 --samplesPerNode 1.5 --fullDepth 5 --iters 8`);
 /// [`SpsrParams::rfta_reference`] is the setting Reach for the Arcs uses.
 #[derive(Debug, Clone, PartialEq)]
@@ -126,8 +112,6 @@ pub struct SpsrParams {
     /// at the samples, scaled internally by the average sample area so it does not depend on the
     /// number of points. 0 gives the unscreened Poisson reconstruction of 2006.
     pub screening: f64,
-    /// Finite-element degree.
-    pub degree: Degree,
     /// Boundary condition.
     pub boundary: Boundary,
     /// Side of the reconstruction cube over the largest side of the points' bounding box (≥ 1).
@@ -149,7 +133,6 @@ impl Default for SpsrParams {
         Self {
             depth: 8,
             screening: 2.0,
-            degree: Degree::One,
             boundary: Boundary::Neumann,
             box_scale: 1.1,
             samples_per_node: 1.5,
@@ -251,18 +234,18 @@ pub struct Reconstruction {
 /// solution has no level set.
 pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Reconstruction> {
     params.validate()?;
-    Ok(run(points, params, crate::sides::NO_SIDES, None, Keep::Nothing)?.0)
+    run(points, params, crate::sides::NO_SIDES)
 }
 
 /// [`reconstruct`], with points known to lie inside or outside the surface.
 ///
 /// The screened Poisson energy pulls the indicator function toward 1/2 at the samples. Here,
-/// after the first solve, every side point where the function is not at least [`SIDE_MARGIN`]
+/// after the first solve, every side point where the function is not at least `SIDE_MARGIN` (0.02)
 /// on its side of the iso-value becomes a screening term of its own, with the target
-/// iso ± [`SIDE_TARGET`] and weight [`SIDE_WEIGHT`], and the system is solved again on the same
-/// octree, starting from the solution before ([`SIDE_RESOLVE_SWEEPS`] sweeps); up to
-/// [`SIDE_PASSES`] times, each adding the points still wrong and multiplying the
-/// weight of those that stay wrong by [`SIDE_WEIGHT_GROWTH`]. This is the screening term with a
+/// iso ± `SIDE_TARGET` (0.1) and weight `SIDE_WEIGHT` (1.0), and the system is solved again on the same
+/// octree, starting from the solution before (`SIDE_RESOLVE_SWEEPS` (2) sweeps); up to
+/// `SIDE_PASSES` (4) times, each adding the points still wrong and multiplying the
+/// weight of those that stay wrong by `SIDE_WEIGHT_GROWTH` (4.0). This is the screening term with a
 /// target per point, in the spirit of the envelope constraints of Kazhdan, Chuang, Rusinkiewicz
 /// and Hoppe ("Poisson Surface Reconstruction with Envelope Constraints", SGP 2020), applied only
 /// where the plain solution disagrees. A wrong side point whose cell the octree does not refine
@@ -309,5 +292,5 @@ pub fn reconstruct_with_sides(
     params: &SpsrParams,
 ) -> Result<Reconstruction> {
     params.validate()?;
-    Ok(run(points, params, sides, None, Keep::Nothing)?.0)
+    run(points, params, sides)
 }

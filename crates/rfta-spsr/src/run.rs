@@ -12,26 +12,15 @@ use crate::{
     solve, tree,
 };
 
-/// What a solve keeps for the next one.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Keep {
-    /// Nothing: a cold solve.
-    Nothing,
-    /// Its coefficients and the octree's node index ([`crate::Workspace`]).
-    Coefficients,
-}
-
 /// The three phases.
 pub(crate) fn run(
     points: &OrientedPoints,
     params: &SpsrParams,
     sides: &dyn SideSet,
-    warm: Option<&solve::WarmStart>,
-    keep: Keep,
-) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
+) -> Result<Reconstruction> {
     let mut octree = Octree::build(points, params)?;
-    let solved = solve_with_sides(&mut octree, params, sides, warm);
-    extract_surface(points, octree, solved, keep)
+    let solved = solve_with_sides(&mut octree, params, sides);
+    extract_surface(points, octree, solved)
 }
 
 /// The first phase's result: the samples (points merged per finest cell, with their density
@@ -110,12 +99,7 @@ struct Solved {
 /// The solve, then while side points are on the wrong side (at most [`SIDE_PASSES`] times)
 /// screening terms for them and a re-solve from the solution before, on the same octree unless
 /// a wrong point's cell needs refining ([`crate::reconstruct_with_sides`]).
-fn solve_with_sides(
-    octree: &mut Octree,
-    params: &SpsrParams,
-    sides: &dyn SideSet,
-    warm: Option<&solve::WarmStart>,
-) -> Solved {
+fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSet) -> Solved {
     let t = Instant::now();
     let total_w: f64 = octree.samples.iter().map(|s| s.weight).sum();
     let total_a: f64 = octree.samples.iter().map(|s| s.area).sum();
@@ -165,7 +149,7 @@ fn solve_with_sides(
         let t2 = Instant::now();
         let (pass, start) = match &resolve {
             Some(start) => (&resolve_params, Some(start)),
-            None => (params, warm),
+            None => (params, None),
         };
         let sol = solve::solve(&octree.levels, &systems, &v, &down, pass, base, start);
         drop(systems);
@@ -230,18 +214,16 @@ fn solve_with_sides(
 }
 
 /// The surface of `solved` on the octree's levels (the first pass's, when a re-solve pulled it
-/// out of the cube and the first pass's stayed inside), in world coordinates, with the report;
-/// and what `keep` asks for the next solve.
+/// out of the cube and the first pass's stayed inside), in world coordinates, with the report.
 fn extract_surface(
     points: &OrientedPoints,
     octree: Octree,
     solved: Solved,
-    keep: Keep,
-) -> Result<(Reconstruction, Option<solve::WarmStart>)> {
+) -> Result<Reconstruction> {
     let Octree {
         frame,
         samples,
-        mut levels,
+        levels,
         time: tree_time,
         ..
     } = octree;
@@ -258,8 +240,7 @@ fn extract_surface(
     let solve::Solution { x, u } = sol;
     let mut values = extract::final_values(&levels, &u);
     drop(u);
-    // Only the coefficients outlive the extraction, and only when the next solve will use them.
-    let kept_x = (keep == Keep::Coefficients).then_some(x);
+    drop(x);
     let mut iso = iso;
     // A re-solve that pulls the surface out of the cube (where it would come out open) while the
     // first solve's stayed inside is dropped for the first solve's surface.
@@ -286,13 +267,6 @@ fn extract_surface(
         return Err(Error::NoSurface { iso });
     }
     extract::to_world(&frame, &mut ex.vertices);
-    let next = kept_x.map(|x| solve::WarmStart {
-        nodes: levels
-            .iter_mut()
-            .map(|l| std::mem::take(&mut l.node_index))
-            .collect(),
-        x,
-    });
     let extract_time = t3.elapsed();
     let mesh = TriMesh {
         vertices: ex.vertices,
@@ -312,5 +286,5 @@ fn extract_surface(
         solve_time,
         extract_time,
     };
-    Ok((Reconstruction { mesh, report }, next))
+    Ok(Reconstruction { mesh, report })
 }

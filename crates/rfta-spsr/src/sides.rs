@@ -60,12 +60,12 @@ impl<const N: usize> SideSet for [SidePoint; N] {
 pub(crate) const NO_SIDES: &[SidePoint; 0] = &[];
 
 /// Re-solves after the first at most, in [`crate::reconstruct_with_sides`].
-pub const SIDE_PASSES: usize = 4;
+pub(crate) const SIDE_PASSES: usize = 4;
 
 /// A side point counts as wrong unless the function is at least this far on its side of the
 /// iso-value (in the indicator's units: 1 inside, 0 outside): the extracted surface follows the
 /// function only approximately, and a point right at the iso-value is on neither side.
-pub const SIDE_MARGIN: f64 = 0.02;
+pub(crate) const SIDE_MARGIN: f64 = 0.02;
 
 /// Between the first solve and the last, only the side points within this of being wrong after
 /// the first solve (in the indicator's units, beyond [`SIDE_MARGIN`]) are evaluated again; the
@@ -73,21 +73,21 @@ pub const SIDE_MARGIN: f64 = 0.02;
 /// function near the points it adds, which lie near the surface; far from it the indicator stays
 /// near its far value (at 129^3 samples of a shape, 2,071 of 2.1 million side points are within
 /// 0.1 after the first solve, 2.0 million within 0.3).
-pub const SIDE_RECHECK: f64 = 0.1;
+pub(crate) const SIDE_RECHECK: f64 = 0.1;
 
 /// A wrong side point is screened toward the iso-value plus (inside) or minus (outside) this: a
 /// target just past the surface moves it no farther than needed (measured on the Reach for the
 /// Arcs dev set, docs/faithfulness.md: targets of 1/2 past it, the indicator's own values,
 /// dig pits and tunnels around the points).
-pub const SIDE_TARGET: f64 = 0.1;
+pub(crate) const SIDE_TARGET: f64 = 0.1;
 
 /// Weight of a side constraint in its first re-solve, in units of the mean screening weight of
 /// one merged sample; each later re-solve that still finds it wrong multiplies it by
 /// [`SIDE_WEIGHT_GROWTH`].
-pub const SIDE_WEIGHT: f64 = 1.0;
+pub(crate) const SIDE_WEIGHT: f64 = 1.0;
 
 /// Growth of a still-wrong side constraint's weight from one re-solve to the next.
-pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
+pub(crate) const SIDE_WEIGHT_GROWTH: f64 = 4.0;
 
 /// Gauss-Seidel sweeps per depth of a re-solve with side points. A re-solve runs on the same
 /// octree with a few more screening terms, so it starts from the solution before it (exactly
@@ -95,7 +95,7 @@ pub const SIDE_WEIGHT_GROWTH: f64 = 4.0;
 /// Measured in the Reach for the Arcs pipeline (docs/speed.md): the dev set's mean Chamfer at
 /// N = 10, 20, 30 the same or lower than with cold 8-sweep re-solves, and the final solve of
 /// the 129^3 bunny 29% shorter.
-pub const SIDE_RESOLVE_SWEEPS: usize = 2;
+pub(crate) const SIDE_RESOLVE_SWEEPS: usize = 2;
 
 /// The side points in the reconstruction cube and the screening terms of those found wrong. The
 /// points stay the caller's (a 257^3 grid has 17 million): each is moved into the cube when it is

@@ -4,9 +4,7 @@
 
 use rfta_geom::{OrientedPoints, glam::DVec3};
 use rfta_mesh::Topology;
-use rfta_spsr::{
-    Boundary, Error, SidePoint, SpsrParams, Workspace, reconstruct, reconstruct_with_sides,
-};
+use rfta_spsr::{Boundary, Error, SidePoint, SpsrParams, reconstruct, reconstruct_with_sides};
 use rfta_testkit::Analytic;
 
 const R: f64 = 0.6;
@@ -200,62 +198,6 @@ fn same_mesh_at_one_and_two_threads() {
 /// A workspace's second solve starts from the first: with one sweep per depth it lands nearer the
 /// converged solution (40 sweeps, cold) than one cold sweep does, in volume and in iso-value; and a
 /// workspace's sequence of solves is the same at any thread count.
-#[test]
-fn warm_start_converges_faster_and_stays_deterministic() {
-    let (p, n, _) = torus(6_000, 5);
-    let points = OrientedPoints::new(p, n, None).expect("cloud");
-    // The same torus a little larger: a cloud that moved between solves.
-    let (p2, n2, _) = torus(6_000, 5);
-    let moved =
-        OrientedPoints::new(p2.iter().map(|&q| 1.01 * q).collect(), n2, None).expect("cloud");
-    let sweeps = |iterations| SpsrParams {
-        depth: 7,
-        iterations,
-        ..SpsrParams::default()
-    };
-    let converged = reconstruct(&moved, &sweeps(40)).expect("converged");
-    let cold = reconstruct(&moved, &sweeps(1)).expect("cold");
-    let mut ws = Workspace::new();
-    ws.reconstruct(&points, &sweeps(8)).expect("first");
-    let warm = ws.reconstruct(&moved, &sweeps(1)).expect("warm");
-    let (v, vc, vw) = (
-        converged.mesh.signed_volume(),
-        cold.mesh.signed_volume(),
-        warm.mesh.signed_volume(),
-    );
-    let (i, ic, iw) = (
-        converged.report.iso_value,
-        cold.report.iso_value,
-        warm.report.iso_value,
-    );
-    eprintln!("volume {v:.6} cold {vc:.6} warm {vw:.6}; iso {i:.6} cold {ic:.6} warm {iw:.6}");
-    assert!(
-        (vw - v).abs() < 0.5 * (vc - v).abs(),
-        "volume: warm {vw} cold {vc} converged {v}"
-    );
-    assert!(
-        (iw - i).abs() < 0.5 * (ic - i).abs(),
-        "iso: warm {iw} cold {ic} converged {i}"
-    );
-    // A cleared workspace starts cold again.
-    ws.clear();
-    let again = ws.reconstruct(&moved, &sweeps(1)).expect("cleared");
-    assert_eq!(again.mesh.vertices, cold.mesh.vertices);
-    // The same sequence on one and two threads.
-    let sequence = |threads| {
-        on(threads, || {
-            let mut ws = Workspace::new();
-            ws.reconstruct(&points, &sweeps(4)).expect("first");
-            ws.reconstruct(&moved, &sweeps(2))
-        })
-        .expect("second")
-        .mesh
-    };
-    let (one, two) = (sequence(1), sequence(2));
-    assert_eq!(one.vertices, two.vertices);
-    assert_eq!(one.faces, two.faces);
-}
-
 #[test]
 fn rfta_setting_and_dirichlet_give_closed_meshes() {
     let o = run(sphere(10_000, 11), &SpsrParams::rfta_reference());

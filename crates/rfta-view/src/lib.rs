@@ -44,20 +44,20 @@ const ORBIT: &str = include_str!("../vendor/three/OrbitControls.js");
 const VIEWER: &str = include_str!("viewer.js");
 
 /// The classes a face can be in, with their colours (sRGB) and names.
-pub const CLASSES: [(&str, [u8; 3]); 3] = [
+pub(crate) const CLASSES: [(&str, [u8; 3]); 3] = [
     ("surface", [150, 170, 200]),
     ("cavity (faces inward)", [240, 150, 40]),
     ("island (another component)", [170, 110, 200]),
 ];
 
-/// A mesh to show, each face in one of [`CLASSES`].
+/// A mesh to show, each face in one of `CLASSES`.
 #[derive(Debug, Clone)]
 pub struct Layer {
     /// Its name in the layer list.
     pub name: String,
     /// The mesh.
     pub mesh: TriMesh,
-    /// Per face, its index into [`CLASSES`] (empty: all the first).
+    /// Per face, its index into `CLASSES` (empty: all the first).
     pub face_class: Vec<u8>,
     /// Shown when the page opens.
     pub visible: bool,

@@ -62,30 +62,59 @@ impl Found {
     }
 }
 
-/// The report's figures for a page (feature `samples`): its serde form's numbers, flags and
-/// short lists, by name, then its warnings.
+/// The report's figures for a page (feature `samples`): first a summary a person reads (genus,
+/// components, watertight, samples on the wrong side, spheres entered, thin handles, cavities,
+/// time), the warnings and what the repair changed; then every number, flag and short list of its
+/// serde form, by name.
 #[cfg(feature = "samples")]
 pub fn report_figures(report: &rfta::Report) -> Vec<(String, String)> {
+    let (m, c, r) = (&report.mesh, &report.consistency, &report.repair);
+    let seconds: f64 = report.timings.iter().map(|(_, t)| t.as_secs_f64()).sum();
+    let mut out: Vec<(String, String)> = [
+        (
+            "genus",
+            m.genus
+                .map_or("undefined (not closed)".into(), |g| g.to_string()),
+        ),
+        ("components", m.components.to_string()),
+        ("watertight", if m.watertight { "yes" } else { "no" }.into()),
+        ("samples on the wrong side", c.sign_errors.to_string()),
+        ("spheres entered", c.entered.to_string()),
+        ("thin handles", c.thin_loops.len().to_string()),
+        (
+            "cavities",
+            format!("{} left, {} opened", r.cavities, r.cavities_opened),
+        ),
+        ("time", format!("{seconds:.2} s")),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    out.extend(
+        report
+            .warnings
+            .iter()
+            .map(|w| ("warning".to_string(), w.to_string())),
+    );
+    out.extend(
+        report
+            .changes()
+            .into_iter()
+            .map(|w| ("repair".to_string(), w)),
+    );
     let Ok(serde_json::Value::Object(all)) = serde_json::to_value(report) else {
-        return Vec::new();
+        return out;
     };
-    all.into_iter()
-        .filter_map(|(k, v)| match v {
-            serde_json::Value::Number(n) => Some((k, n.to_string())),
-            serde_json::Value::Bool(b) => Some((k, b.to_string())),
-            serde_json::Value::Array(a) if a.len() <= 12 && a.iter().all(|x| x.is_number()) => {
-                let items: Vec<String> = a.iter().map(|x| x.to_string()).collect();
-                Some((k, items.join(", ")))
-            }
-            _ => None,
-        })
-        .chain(
-            report
-                .warnings
-                .iter()
-                .map(|w| ("warning".to_string(), w.clone())),
-        )
-        .collect()
+    out.extend(all.into_iter().filter_map(|(k, v)| match v {
+        serde_json::Value::Number(n) => Some((k, n.to_string())),
+        serde_json::Value::Bool(b) => Some((k, b.to_string())),
+        serde_json::Value::Array(a) if a.len() <= 12 && a.iter().all(|x| x.is_number()) => {
+            let items: Vec<String> = a.iter().map(|x| x.to_string()).collect();
+            Some((k, items.join(", ")))
+        }
+        _ => None,
+    }));
+    out
 }
 
 /// The scene of `mesh`: its faces classed (the largest component, cavities: components facing

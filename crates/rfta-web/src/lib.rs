@@ -45,7 +45,7 @@ pub const SHAPES: [(&str, &str, Analytic); 4] = [
 ];
 
 /// The most cells per axis a built-in shape is sampled with (65^3 samples).
-pub const MAX_CELLS: usize = 64;
+pub(crate) const MAX_CELLS: usize = 64;
 
 /// What to reconstruct.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,7 +54,7 @@ pub enum Input {
     Shape {
         /// Its name.
         name: String,
-        /// Grid cells per axis (2 to [`MAX_CELLS`]).
+        /// Grid cells per axis (2 to `MAX_CELLS` (64)).
         cells: usize,
     },
     /// An `.npy` grid (bounds `[-1, 1]^3`: a page has no sidecar).

@@ -28,24 +28,24 @@ use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, TriMesh};
 
 use crate::report::{InputReport, Journal};
-use crate::{Error, MeshCheck, Params, Result};
+use crate::{Error, MeshCheck, Params, Result, Warning};
 
 /// A separation ratio above this counts as a violation (1% above the exact bound of 1).
-pub const SEPARATION_TOLERANCE: f64 = 1.01;
+pub(crate) const SEPARATION_TOLERANCE: f64 = 1.01;
 
 /// A separation ratio above this is a severe violation: the spheres overlap by a quarter of the
 /// distance between the samples. Noise of 5% of the values, or of 5% of a grid spacing, stays
 /// below 1.1; occupancy, random and rescaled fields go far beyond.
-pub const SEVERE_RATIO: f64 = 1.25;
+pub(crate) const SEVERE_RATIO: f64 = 1.25;
 
 /// What [`inspect`] found.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Inspection {
     /// Samples that have a sample of the other sign to compare with (zero values are skipped).
     pub checked: usize,
-    /// Samples whose separation ratio exceeds [`SEPARATION_TOLERANCE`].
+    /// Samples whose separation ratio exceeds `SEPARATION_TOLERANCE` (1.01).
     pub inconsistent: usize,
-    /// Samples whose separation ratio exceeds [`SEVERE_RATIO`].
+    /// Samples whose separation ratio exceeds `SEVERE_RATIO` (1.25).
     pub severe: usize,
     /// The worst pair: `(i, j, ratio)`, `i` the sample with the larger `|s|`.
     pub worst: Option<(usize, usize, f64)>,
@@ -55,11 +55,11 @@ pub struct Inspection {
     /// A clamping magnitude, if the values look clamped (see the module docs), with the number of
     /// plateau samples that show it.
     pub clamp: Option<(f64, usize)>,
-    /// The largest separation ratio short of [`SEVERE_RATIO`] (1 when no pair exceeds 1): noise
+    /// The largest separation ratio short of `SEVERE_RATIO` (1.25) (1 when no pair exceeds 1): noise
     /// that inflates values by a fraction `e` shows as a ratio up to `1 + e`.
     pub overlap: f64,
     /// On a grid, the largest `(|s_i - s_j| - d) / (|s_i| + |s_j|)` over neighbours `i`, `j` along
-    /// an axis (`d` apart), below [`MAX_NOISE`] (0 when none is positive): a distance changes by at
+    /// an axis (`d` apart), below `MAX_NOISE` (0.25) (0 when none is positive): a distance changes by at
     /// most `d` over `d`, so relative noise of `e` shows as up to `e` where the gradient follows
     /// the axis, far more often than across the surface.
     pub lipschitz_excess: f64,
@@ -77,7 +77,7 @@ const FLIPPED_RIM: f64 = 0.95;
 
 /// Excess over the 1-Lipschitz bound (or the separation bound) beyond this fraction of the values
 /// is not counted as noise (the separation test judges such fields).
-pub const MAX_NOISE: f64 = 0.25;
+pub(crate) const MAX_NOISE: f64 = 0.25;
 
 impl Inspection {
     /// Whether the field looks inside-positive: at least 95% of the samples around
@@ -89,6 +89,11 @@ impl Inspection {
     /// The fraction of checked samples that are inconsistent.
     pub fn inconsistent_fraction(&self) -> f64 {
         self.inconsistent as f64 / self.checked.max(1) as f64
+    }
+
+    /// The separation ratio beyond which a sample counts as [`Inspection::severe`].
+    pub fn severe_ratio(&self) -> f64 {
+        SEVERE_RATIO
     }
 
     /// The fraction of checked samples that are severely inconsistent.
@@ -354,7 +359,7 @@ pub(crate) fn describe(samples: &SdfSamples, i: usize) -> String {
 }
 
 /// Noise up to this fraction of the values is rounding: the spheres keep their radii.
-pub const NOISE_FLOOR: f64 = 0.001;
+pub(crate) const NOISE_FLOOR: f64 = 0.001;
 
 /// Runs [`inspect`] and applies [`Params::check`]'s policy.
 ///
@@ -380,18 +385,16 @@ pub(crate) fn samples(
     let noise = (found.overlap - 1.0).max(found.lipschitz_excess);
     if noise > NOISE_FLOOR {
         report.radius_scale = Some((1.0 + noise).powi(-2));
-        journal.warnings.push(format!(
-            "the values look noisy, by up to {:.2}% of their magnitude (they change faster than a distance can, or overlap the other sign's): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
-            100.0 * noise
-        ));
+        journal.warnings.push(Warning::Noisy { fraction: noise });
     }
     if params.clamp.is_none()
         && let Some((c, count)) = found.clamp
     {
         report.clamp = Some(c);
-        journal.warnings.push(format!(
-            "the values look clamped at {c}: {count} samples sit on flat plateaus at that magnitude; they are treated as at least {c} from the surface (set a clamp to override, or turn the check off)"
-        ));
+        journal.warnings.push(Warning::Clamped {
+            at: c,
+            samples: count,
+        });
     }
     // Inside negative is the convention (the paper's, gpytoolbox's, OpenVDB's): a field whose
     // outside is negative all around, with positive samples within, is most likely of the
@@ -414,20 +417,19 @@ pub(crate) fn samples(
         )));
     }
     if found.inconsistent > 0 {
-        let worst = found.worst.map_or(String::new(), |(i, j, r)| {
+        let worst = found.worst.map(|(i, j, r)| {
             format!(
-                "; worst: {} and {} are {:.3e} apart, their spheres overlap by a factor {r:.3}",
+                "{} and {} are {:.3e} apart, their spheres overlap by a factor {r:.3}",
                 describe(samples, i),
                 describe(samples, j),
                 (samples.position(i) - samples.position(j)).length()
             )
         });
-        let what = format!(
-            "{} of {} samples ({:.1}%) overlap the nearest sample of the other sign, so |s| is larger than the distance to the surface there{worst}",
-            found.inconsistent,
-            found.checked,
-            100.0 * found.inconsistent_fraction()
-        );
+        let what = Warning::Overlap {
+            inconsistent: found.inconsistent,
+            checked: found.checked,
+            worst,
+        };
         if found.severe_fraction() > params.max_inconsistent {
             return Err(Error::NotADistance(format!(
                 "{what}; {:.1}% overlap by more than a factor {}. Is it an occupancy, density or rescaled field? Turn the check off to reconstruct anyway",
@@ -455,6 +457,7 @@ pub(crate) fn mesh(mesh: &TriMesh, topo: &rfta_mesh::Topology) -> Result<MeshChe
         boundary_edges: topo.boundary_edges,
         nonmanifold_edges: topo.nonmanifold_edges,
         components: topo.components,
+        genus: topo.genus(),
     })
 }
 

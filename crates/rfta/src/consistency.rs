@@ -12,7 +12,7 @@
 //! - a **gap**: `d_i > |s_i| + 0.25 h`, the surface is farther than the sample says.
 //!
 //! It also finds the mesh's **thin handles**: independent non-contractible loops shorter than
-//! `π h` ([`THIN_LOOP`]; `rfta_mesh::short_loops`), each around a bar or a tunnel less than about
+//! `π h` (`THIN_LOOP` (π); `rfta_mesh::short_loops`), each around a bar or a tunnel less than about
 //! one spacing across. Samples `h` apart do not resolve such a part (a sphere tangent to it fits
 //! between its neighbours whether it is there or not), so they can neither confirm nor rule the
 //! handle out: a true thin handle and a spurious one both pass the three checks above
@@ -34,17 +34,42 @@ use crate::Result;
 
 /// A sign error needs `|s| > SIGN_MARGIN h`: samples closer to the surface than that carry no
 /// reliable side.
-pub const SIGN_MARGIN: f64 = 0.01;
+pub(crate) const SIGN_MARGIN: f64 = 0.01;
 
 /// A sphere counts as entered when the mesh comes closer than `|s| - ENTER_MARGIN h`.
-pub const ENTER_MARGIN: f64 = 0.1;
+pub(crate) const ENTER_MARGIN: f64 = 0.1;
 
 /// A gap is a mesh farther than `|s| + GAP_MARGIN h`.
-pub const GAP_MARGIN: f64 = 0.25;
+pub(crate) const GAP_MARGIN: f64 = 0.25;
 
 /// A non-contractible loop shorter than `THIN_LOOP h` makes a thin handle: the circumference of a
 /// circle one spacing across.
-pub const THIN_LOOP: f64 = std::f64::consts::PI;
+pub(crate) const THIN_LOOP: f64 = std::f64::consts::PI;
+
+/// The margins an agreement is judged with, in sample spacings `h`: `SIGN_MARGIN` (0.01),
+/// `ENTER_MARGIN` (0.1), `GAP_MARGIN` (0.25) and `THIN_LOOP` (π) (the default is the only setting).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Margins {
+    /// A sample on the wrong side counts when `|s| >` this.
+    pub sign: f64,
+    /// A sphere counts as entered when the mesh comes closer than `|s| -` this.
+    pub enter: f64,
+    /// A gap is a mesh farther than `|s| +` this.
+    pub gap: f64,
+    /// A handle is thin when a loop around it is shorter than this.
+    pub thin_loop: f64,
+}
+
+impl Default for Margins {
+    fn default() -> Self {
+        Self {
+            sign: SIGN_MARGIN,
+            enter: ENTER_MARGIN,
+            gap: GAP_MARGIN,
+            thin_loop: THIN_LOOP,
+        }
+    }
+}
 
 /// What [`measure`] found.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
@@ -64,9 +89,9 @@ pub struct Consistency {
     /// (0 when the mesh enters none).
     pub deepest_entry: f64,
     /// The lengths, in spacings and ascending, of a shortest set of independent loops around the
-    /// mesh's handles that are shorter than [`THIN_LOOP`] spacings (a handle thin one way has
+    /// mesh's handles that are shorter than `THIN_LOOP` (π) spacings (a handle thin one way has
     /// one, a handle small both ways two); empty when the mesh has none, is not closed, or has a
-    /// genus above [`THIN_LOOP_MAX_GENUS`].
+    /// genus above `THIN_LOOP_MAX_GENUS` (256).
     pub thin_loops: Vec<f64>,
 }
 
@@ -189,7 +214,7 @@ pub(crate) fn measure_with(
 
 /// Above this genus [`Consistency::thin_loops`] is not searched: the search keeps a class of
 /// `2 genus` bits per edge (64 bytes per edge here).
-pub const THIN_LOOP_MAX_GENUS: i64 = 256;
+pub(crate) const THIN_LOOP_MAX_GENUS: i64 = 256;
 
 /// [`Consistency::thin_loops`]: only a closed surface with handles has loops to find.
 fn thin_loops(mesh: &TriMesh, topology: &Topology, h: f64) -> Vec<f64> {

@@ -17,7 +17,7 @@
 //!
 //! The defaults ([`Params::default`]) are the paper's rounds, points per sphere, batch, step and
 //! tolerance, with two departures chosen by measurement (docs/speed.md): the Poisson depth follows
-//! the sample spacing ([`spsr_depth_for`]) and, on grids, only spheres within [`OWNER_BAND`]
+//! the sample spacing ([`spsr_depth_for`]) and, on grids, only spheres within `OWNER_BAND` (3.0)
 //! spacings of the surface own points. [`Params::paper_table`] is the setting of its Table 2.
 //! Results are deterministic for a given seed, whatever the thread count.
 //!
@@ -55,6 +55,7 @@ pub mod plane;
 mod pool;
 mod report;
 mod rounds;
+mod warning;
 
 pub use rfta_feasible as feasible;
 pub use rfta_geom as geom;
@@ -63,18 +64,16 @@ pub use rfta_raster as raster;
 pub use rfta_sphere_tree as sphere_tree;
 pub use rfta_spsr as spsr;
 
-pub use consistency::Consistency;
+pub use consistency::{Consistency, Margins};
 pub use memory::{available_memory, check_memory, estimate_peak_memory, format_bytes};
-pub use params::{
-    CELLS_PER_SPACING, InitialPoints, MAX_THREADS, OWNER_BAND, PRESETS, Params, RASTER_REACH,
-    ROUND_FULL_DEPTH, ROUND_SWEEPS, SCREENING_FULL_DEPTH, SPSR_FULL_DEPTH, SUB_CELL_LOOP, Seeds,
-    screening_at, spsr_depth_for,
-};
+pub(crate) use params::{CELLS_PER_SPACING, RASTER_REACH, SUB_CELL_LOOP};
+pub use params::{InitialPoints, PRESETS, Params, Seeds, screening_at, spsr_depth_for};
 pub use pool::{GlobalPool, cores, start_global_pool};
 pub use report::{
     FinalSolveReport, InitialReport, InputReport, MeshCheck, Reconstruction, RepairReport, Report,
     RoundsReport, Stage, Step,
 };
+pub use warning::Warning;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

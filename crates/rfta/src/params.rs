@@ -11,7 +11,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 use crate::{Error, Result};
 
 /// The most worker threads [`Params::threads`] may ask for.
-pub const MAX_THREADS: usize = 4096;
+pub(crate) const MAX_THREADS: usize = 4096;
 
 /// Parameters. Lengths (`transport_step`, `tolerance`) are in the normalized unit box, as in the
 /// reference. The paper's symbols are given for each.
@@ -30,7 +30,7 @@ pub struct Params {
     /// Spheres in each feasibility batch, drawn with replacement, the paper's `b` (10^4; 0 = all).
     pub batch_size: usize,
     /// Screening weight of the Poisson solves, in `rfta-spsr`'s units (30), at depths up to
-    /// [`SCREENING_FULL_DEPTH`]; each depth beyond halves it ([`screening_at`]). The reference
+    /// `SCREENING_FULL_DEPTH` (9); each depth beyond halves it ([`screening_at`]). The reference
     /// runs PoissonRecon with 10; on the same tangency points in the reference's setting (box
     /// 3.2) our solver needs about 30 for the same fit (bunny, N = 30: PoissonRecon at 10 reaches
     /// Chamfer 0.00717, ours 0.00905 at 10 and 0.00679 at 30; see docs/spsr.md).
@@ -53,7 +53,7 @@ pub struct Params {
     pub clamp: Option<f64>,
     /// Inspect the samples first ([`crate::check::inspect`]): refuse values that are not a
     /// distance (more than [`Params::max_inconsistent`] of the samples overlap a sample of the
-    /// other sign by more than [`crate::check::SEVERE_RATIO`], or a value exceeds the samples'
+    /// other sign by more than `SEVERE_RATIO` (1.25), or a value exceeds the samples'
     /// extent), warn about milder violations, and detect clamping when `clamp` is `None`.
     /// Default `true`.
     pub check: bool,
@@ -70,7 +70,7 @@ pub struct Params {
     pub threads: Option<usize>,
     /// On a grid, spheres farther from the surface than this many grid spacings
     /// (`|s| >= owner_band h`) own no tangency point; they stay constraints, in the rasterization
-    /// and in every feasibility test. Default [`OWNER_BAND`]. `None`: every sphere owns points,
+    /// and in every feasibility test. Default `OWNER_BAND` (3.0). `None`: every sphere owns points,
     /// as in the reference. Scattered samples always give every sphere points: their spacing
     /// varies, and where samples near the surface are sparse the far spheres' points are needed
     /// (measured: 5,500 samples of a sphere, four in five far from it, mean vertex error 4x
@@ -162,14 +162,14 @@ fn zero_is_none<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<f
 /// Chosen by measurement (docs/speed.md): on the dev shapes at N = 10 to 50, 4 cells per spacing
 /// give the same mean Chamfer as the reference's fixed depth 10 at a fraction of the time, and
 /// fewer cells lose accuracy.
-pub const CELLS_PER_SPACING: f64 = 4.0;
+pub(crate) const CELLS_PER_SPACING: f64 = 4.0;
 
 /// The default [`Params::owner_band`]: spheres within 3 sample spacings of the surface own points.
 ///
 /// Measured on the dev shapes (docs/speed.md): the far spheres' points repeat, less precisely,
 /// what the near spheres say; without them the mean Chamfer drops by 9% (N = 10), 25% (N = 20)
 /// and 39% (N = 30) and the time by 2-6x, with one shape in eight more losing its genus.
-pub const OWNER_BAND: f64 = 3.0;
+pub(crate) const OWNER_BAND: f64 = 3.0;
 
 /// With an owner band, only spheres smaller than this many owner radii are rasterized for the
 /// empty space: an owner's start is the empty space nearest its centre, at about its own radius,
@@ -181,7 +181,7 @@ pub const OWNER_BAND: f64 = 3.0;
 /// Measured (docs/speed.md): on the dev set at N = 10, 20, 30 every mesh's Chamfer is the same
 /// as with every sphere drawn (at 2 owner radii, knight at N = 30 lost 4%); the 129^3 bunny's
 /// rasterization takes 2.0 s instead of 24.5 s.
-pub const RASTER_REACH: f64 = 3.0;
+pub(crate) const RASTER_REACH: f64 = 3.0;
 
 /// The box of the Poisson solves, in unit boxes (the reference's `point_cloud_to_mesh`).
 const SPSR_BOX: f64 = 3.2;
@@ -190,13 +190,13 @@ const SPSR_BOX: f64 = 3.2;
 /// times the cloud; in the reference's 3.2 box the cloud spans 10 cells at depth 5 and 2.5 at
 /// depth 3. Measured (docs/speed.md): 3 keeps the Chamfer and cuts the time of small inputs 3x
 /// (the complete depth-5 grid was most of a solve at N = 10).
-pub const SPSR_FULL_DEPTH: u32 = 3;
+pub(crate) const SPSR_FULL_DEPTH: u32 = 3;
 
 /// Gauss-Seidel sweeps per depth of the solves inside the fine-tuning rounds (the final solve
 /// keeps PoissonRecon's 8). A round's surface only guides the next moves of the points, at most
 /// `tau` each; measured on the dev shapes (docs/speed.md): half the sweeps keep the mean Chamfer
 /// within 2% (N = 10 to 50: +0.3%, -1.2%, -0.1%, +1.6%) for 13 to 21% less time.
-pub const ROUND_SWEEPS: usize = 4;
+pub(crate) const ROUND_SWEEPS: usize = 4;
 
 /// The deepest Poisson solve that runs the full [`Params::screening`]; each depth beyond halves
 /// it ([`screening_at`]).
@@ -208,10 +208,10 @@ pub const ROUND_SWEEPS: usize = 4;
 /// ten rounds, 23,955 spheres entered at the end, genus 7 instead of 0); weaker screening there
 /// leaves such a point to its neighbours. Up to depth 9 (N = 30) 30 is the most accurate; at
 /// depth 10 (N = 50) 15 is more accurate than 30 and gets more genera right.
-pub const SCREENING_FULL_DEPTH: u32 = 9;
+pub(crate) const SCREENING_FULL_DEPTH: u32 = 9;
 
 /// The screening weight the solves at `depth` run for a [`Params::screening`] of `screening`:
-/// itself up to [`SCREENING_FULL_DEPTH`], halved for each depth beyond.
+/// itself up to `SCREENING_FULL_DEPTH` (9), halved for each depth beyond.
 pub fn screening_at(screening: f64, depth: u32) -> f64 {
     let beyond = depth.saturating_sub(SCREENING_FULL_DEPTH);
     screening / f64::from(1u32 << beyond.min(16))
@@ -229,7 +229,7 @@ pub fn screening_at(screening: f64, depth: u32) -> f64 {
 /// to 17.5 s of wall time at Chamfer 0.000462 to 0.000463. At depth 10 (N = 50) the coarser
 /// rounds cost accuracy (0.002894 to 0.002903) and the near batches were within the seeds' noise
 /// at N = 30, so up to depth 10 the rounds stay the reference's.
-pub const ROUND_FULL_DEPTH: u32 = 10;
+pub(crate) const ROUND_FULL_DEPTH: u32 = 10;
 
 /// Handles whose loop is shorter than this many of the final solve's finest cells are cut
 /// ([`crate::RepairReport::sub_cell_handles_cut`], `rfta_repair::cut_sub_cell_handles`): a
@@ -241,7 +241,7 @@ pub const ROUND_FULL_DEPTH: u32 = 10;
 /// (2 of 0) have loops of 0.26 to 1.9 finest cells (0.02 to 0.16 spacings); cut below 2 cells,
 /// every dev shape at N = 100 has its genus in one piece and no thin loop, N = 50 seven of
 /// eight; below 4 cells also cuts handles of thingi54725 at N = 10 that it has (genus 9 of 11).
-pub const SUB_CELL_LOOP: f64 = 2.0;
+pub(crate) const SUB_CELL_LOOP: f64 = 2.0;
 
 /// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at
 /// most `1 / CELLS_PER_SPACING` of the sample spacing `h` (in the unit box), within 5 to 12.
@@ -351,7 +351,7 @@ impl Params {
     /// box (`None`: unknown, depth 10 as the reference): the reference's box and degree, our
     /// screening at that depth ([`screening_at`]), [`Params::spsr_depth`] or the depth matched to
     /// the spacing, and complete grids
-    /// up to depth [`SPSR_FULL_DEPTH`]. `rfta psr --preset rfta` runs the same.
+    /// up to depth `SPSR_FULL_DEPTH` (3). `rfta psr --preset rfta` runs the same.
     pub fn spsr_params(&self, spacing: Option<f64>) -> SpsrParams {
         let depth = self
             .spsr_depth
@@ -366,8 +366,8 @@ impl Params {
     }
 
     /// The settings of the solves inside the fine-tuning rounds: [`Params::spsr_params`] with
-    /// [`ROUND_SWEEPS`] Gauss-Seidel sweeps per depth, one depth coarser beyond
-    /// [`ROUND_FULL_DEPTH`] (the screening weight stays the final depth's).
+    /// `ROUND_SWEEPS` (4) Gauss-Seidel sweeps per depth, one depth coarser beyond
+    /// `ROUND_FULL_DEPTH` (10) (the screening weight stays the final depth's).
     pub fn round_spsr_params(&self, spacing: Option<f64>) -> SpsrParams {
         let last = self.spsr_params(spacing);
         SpsrParams {

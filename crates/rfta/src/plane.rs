@@ -30,7 +30,7 @@ const PLANE_BOX: f64 = 1.5;
 
 /// Screening weight of the 2D solves, `alpha h` in `rfta-plane`'s units (chosen on the shared 2D
 /// inputs, docs/2d.md).
-pub const PLANE_SCREENING: f64 = 4.0;
+pub(crate) const PLANE_SCREENING: f64 = 4.0;
 
 /// V-cycles after the full-multigrid pass in the rounds' solves (the final solve runs
 /// `SpsrParams::default().cycles`). A round's curve only guides the next moves; measured on the
@@ -83,7 +83,7 @@ pub struct Reconstruction2 {
 /// Uses [`Params::rounds`], [`Params::max_points_per_sphere`], [`Params::transport_step`],
 /// [`Params::tolerance`], [`Params::raster_resolution`], [`Params::clamp`], [`Params::spsr_depth`]
 /// (the quadtree's depth; default from the sample spacing), [`Params::owner_band`] and
-/// [`Params::threads`]; the 2D screening is [`PLANE_SCREENING`].
+/// [`Params::threads`]; the 2D screening is `PLANE_SCREENING` (4.0).
 ///
 /// # Errors
 /// [`Error::InvalidParams`] (also when [`Params::genus`] is given), [`Error::NoSurface`] when no circle has a free arc of the side a

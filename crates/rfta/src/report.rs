@@ -6,6 +6,8 @@ use std::time::Duration;
 
 use rfta_feasible::TangentPoints;
 use rfta_geom::TriMesh;
+
+use crate::Warning;
 use serde::{Serialize, Serializer};
 
 /// A pipeline stage, for progress reports.
@@ -152,7 +154,7 @@ pub struct Report {
     pub consistency: crate::Consistency,
     /// Things the caller should know: inconsistent samples, a detected clamp, more than 5% of the
     /// spheres without a point, a mesh that is not watertight.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
     /// Wall time of each step, in order.
     #[serde(serialize_with = "seconds_by_step")]
     pub timings: Vec<(Step, Duration)>,
@@ -169,7 +171,7 @@ pub struct InputReport {
     /// The clamp used: [`crate::Params::clamp`], or the one [`crate::Params::check`] detected.
     pub clamp: Option<f64>,
     /// The factor below 1 every sphere's radius `|s|` was shrunk by, when [`crate::Params::check`]
-    /// measured noise above [`crate::check::NOISE_FLOOR`] (see [`crate::check`]); `None`: radii
+    /// measured noise above `NOISE_FLOOR` (0.001) (see [`crate::check`]); `None`: radii
     /// are `|s|`.
     pub radius_scale: Option<f64>,
 }
@@ -199,7 +201,7 @@ pub struct RoundsReport {
     /// Octree depth of the final screened Poisson solve.
     pub spsr_depth: u32,
     /// Octree depth of the solves inside the rounds: the final one's, or one less on fine grids
-    /// ([`crate::ROUND_FULL_DEPTH`]).
+    /// (`ROUND_FULL_DEPTH` (10)).
     pub round_spsr_depth: u32,
     /// Tangency points before each fine-tuning round and at the end (`rounds + 1` entries unless
     /// stopped early).
@@ -231,7 +233,7 @@ pub struct RepairReport {
     /// Small closed islands removed from the final mesh because no sample witnesses them (see
     /// [`crate::Params::min_island`]).
     pub islands_removed: usize,
-    /// Handles cut because their loop is shorter than [`crate::SUB_CELL_LOOP`] of the final
+    /// Handles cut because their loop is shorter than `SUB_CELL_LOOP` (2.0) of the final
     /// solve's finest cells: the extraction's choice at a saddle of the Poisson function near
     /// its iso-value, a thread or a pinhole a fraction of a cell across, not a feature of the
     /// function ([`rfta_repair::cut_sub_cell_handles`]).
@@ -278,11 +280,100 @@ pub struct RepairReport {
     pub cavities_opened: usize,
 }
 
+impl Report {
+    /// What the final solve and the repair changed, one sentence each (nothing for a step that
+    /// changed nothing): the command line's verbose lines, the HTML page's.
+    pub fn changes(&self) -> Vec<String> {
+        let (r, f) = (&self.repair, &self.final_solve);
+        let mut out = Vec::new();
+        if r.islands_removed > 0 {
+            out.push(format!(
+                "removed {} small closed island(s) that no sample witnesses",
+                r.islands_removed
+            ));
+        }
+        if r.unsupported_removed > 0 {
+            out.push(format!(
+                "removed {} component(s) the samples contradict (inside sample spheres, or an inward-facing shell around nothing)",
+                r.unsupported_removed
+            ));
+        }
+        if r.sub_cell_handles_cut > 0 {
+            out.push(format!(
+                "cut {} handle(s) whose loop is shorter than {} of the final solve's cells (side {:.3e}): threads or pinholes where its function has a saddle at the iso-value",
+                r.sub_cell_handles_cut,
+                crate::SUB_CELL_LOOP,
+                f.finest_cell
+            ));
+        }
+        if let [first, again @ ..] = f.side_errors.as_slice()
+            && !again.is_empty()
+        {
+            let again: Vec<String> = again.iter().map(ToString::to_string).collect();
+            out.push(format!(
+                "the final solve put {first} samples on the wrong side of (or at) its surface; re-solved with them screened toward their side: {}",
+                again.join(", then ")
+            ));
+        }
+        if r.vertices_pushed_out > 0 {
+            out.push(format!(
+                "moved {} vertices out of the sample spheres they entered ({} of them added where a face cut a sphere with no vertex inside)",
+                r.vertices_pushed_out, r.vertices_added
+            ));
+        }
+        if r.dents > 0 {
+            out.push(format!(
+                "split {} faces that cut a small sample sphere with the sample on the wrong side, and dented them past it",
+                r.dents
+            ));
+        }
+        if r.cavities_opened > 0 {
+            out.push(format!(
+                "opened {} cavit{} the surface had sealed around outside samples (a gap or a hole the samples leave open)",
+                r.cavities_opened,
+                if r.cavities_opened == 1 { "y" } else { "ies" }
+            ));
+        }
+        if r.small_components_asked + r.thin_handles_asked > 0 {
+            out.push(format!(
+                "asked the SDF about {} small component(s) and {} thin handle(s): removed {} and cut {} it contradicts",
+                r.small_components_asked,
+                r.thin_handles_asked,
+                r.small_components_removed,
+                r.thin_handles_cut
+            ));
+        }
+        if r.components_joined + r.handles_cut > 0 {
+            out.push(format!(
+                "to reach the genus asked: joined {} component(s) to the largest, cut {} handle(s)",
+                r.components_joined, r.handles_cut
+            ));
+        }
+        out
+    }
+
+    /// The agreement with the samples, in one sentence.
+    pub fn agreement(&self) -> String {
+        let c = &self.consistency;
+        format!(
+            "agreement with the {} samples (h = {:.4}): {} on the wrong side, {} spheres entered by more than {} h (deepest {:.2} h), {} gaps over {} h",
+            c.samples,
+            c.spacing,
+            c.sign_errors,
+            c.entered,
+            crate::consistency::ENTER_MARGIN,
+            c.deepest_entry,
+            c.gaps,
+            crate::consistency::GAP_MARGIN
+        )
+    }
+}
+
 /// What happened when, across the stages: the warnings and each step's time, in order (a
 /// [`Report`]'s `warnings` and `timings`).
 #[derive(Debug, Default)]
 pub(crate) struct Journal {
-    pub(crate) warnings: Vec<String>,
+    pub(crate) warnings: Vec<Warning>,
     pub(crate) timings: Vec<(Step, Duration)>,
 }
 
@@ -325,6 +416,8 @@ pub struct MeshCheck {
     pub nonmanifold_edges: usize,
     /// Connected components.
     pub components: usize,
+    /// The genus (handles), when the mesh is closed and orientable.
+    pub genus: Option<i64>,
 }
 
 /// A reconstructed mesh and how it was made.
@@ -403,9 +496,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 6 + 4 + 4 + 14 fields, the mesh check's 6, the consistency check's 6
+        // The stages' 4 + 6 + 4 + 4 + 14 fields, the mesh check's 7, the consistency check's 6
         // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 6 + 4 + 4 + 14 + 6 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 6 + 4 + 4 + 14 + 7 + 6 + 2, "{text}");
     }
 
     #[test]

@@ -2,7 +2,7 @@
 
 use rfta::geom::glam::DVec3;
 use rfta::geom::{Grid, SdfSamples};
-use rfta::{Params, reconstruct};
+use rfta::{Params, Warning, reconstruct};
 use rfta_testkit::Analytic;
 
 fn grid_samples(shape: Analytic, n: usize) -> SdfSamples {
@@ -94,8 +94,9 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
     }
     assert!(r.mesh.watertight && r.mesh.boundary_edges == 0 && r.mesh.components == 1);
     // The final solve's finest cells, in the samples' coordinates: the reference's cube, 3.2
-    // times the final points' longest extent, over 2^depth; at most a CELLS_PER_SPACING-th of
-    // the spacing (the points' box is within the samples').
+    // times the final points' longest extent, over 2^depth; at most a quarter of the spacing
+    // (`Params::spsr_depth`'s documented four cells per spacing; the points' box is within the
+    // samples').
     let h = samples.spacing();
     let cell = r.final_solve.finest_cell;
     let bounds = rfta::geom::Aabb::from_points(&out.points.points);
@@ -105,7 +106,7 @@ fn the_report_accounts_for_spheres_and_checks_the_mesh() {
         (cell - expected).abs() < 1e-9 * expected,
         "{cell} {expected}"
     );
-    assert!(cell <= h / rfta::CELLS_PER_SPACING, "{cell} {h}");
+    assert!(cell <= h / 4.0, "{cell} {h}");
     assert_eq!(r.input.inconsistent_samples, 0);
     assert_eq!(r.input.clamp, None);
     // Under 5% of the spheres: counted, not a warning.
@@ -154,7 +155,12 @@ fn the_check_refuses_non_distances_and_detects_clamping() {
     let clamped = with(exact.iter().map(|v| v.clamp(-band, band)).collect());
     let out = reconstruct(&clamped, &fast).expect("clamped");
     assert_eq!(out.report.input.clamp, Some(band));
-    assert!(out.report.warnings.iter().any(|w| w.contains("clamped")));
+    assert!(
+        out.report
+            .warnings
+            .iter()
+            .any(|w| matches!(w, Warning::Clamped { .. }))
+    );
     let worst = out
         .mesh
         .vertices
@@ -317,10 +323,10 @@ fn spheres_beyond_the_owner_band_own_no_point_and_stay_constraints() {
     }
     // Nothing to warn about but the agreement with the samples, which is warned about exactly
     // when it is not perfect (2 rounds on a torus 2 spacings thick).
-    let others: Vec<&String> = r
+    let others: Vec<&Warning> = r
         .warnings
         .iter()
-        .filter(|w| !w.starts_with("the mesh disagrees with the samples"))
+        .filter(|w| !matches!(w, Warning::Disagrees { .. }))
         .collect();
     assert!(others.is_empty(), "{others:?}");
     assert_eq!(
@@ -633,7 +639,7 @@ fn a_known_genus_is_reached_by_cutting_handles_and_joining_components() {
         more.report
             .warnings
             .iter()
-            .any(|w| w.contains("below the 2 asked")),
+            .any(|w| matches!(w, Warning::GenusBelow { asked: 2, .. })),
         "{:?}",
         more.report.warnings
     );
@@ -692,7 +698,7 @@ fn a_cavity_is_counted_and_warned_about() {
             .report
             .warnings
             .iter()
-            .any(|w| w.contains("1 cavity")),
+            .any(|w| matches!(w, Warning::Cavities { count: 1, .. })),
         "{:?}",
         hollow.report.warnings
     );
@@ -703,13 +709,19 @@ fn a_cavity_is_counted_and_warned_about() {
             .report
             .warnings
             .iter()
-            .any(|w| w.contains("walled in")),
+            .any(|w| matches!(w, Warning::Cavities { kept: false, .. })),
         "{:?}",
         hollow.report.warnings
     );
     let solid = reconstruct(&sdf(false), &Params::default()).expect("reconstruct");
     assert_eq!(solid.report.repair.cavities, 0);
-    assert!(solid.report.warnings.iter().all(|w| !w.contains("cavit")));
+    assert!(
+        solid
+            .report
+            .warnings
+            .iter()
+            .all(|w| !matches!(w, Warning::Cavities { .. }))
+    );
 }
 
 /// Two blocks 0.08 apart (0.8 spacings), the grid's samples in the gap outside: the surface

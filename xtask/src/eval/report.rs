@@ -358,12 +358,11 @@ fn write_consistency(
     methods: &[String],
 ) -> Result<()> {
     writeln!(s, "## Agreement with the samples and the topology\n")?;
+    let margins = rfta::Margins::default();
     writeln!(
         s,
         "Per N and method, over the shapes that produced a mesh (`rfta::consistency`, h = grid spacing): samples with |s| > {} h on the wrong side of the mesh by winding number, and samples whose sphere the mesh enters by more than {} h (total, and the shapes with any); the worst shape's share of entered samples; independent loops around handles shorter than {:.2} h, thin handles the samples can neither confirm nor rule out (total, and the shapes with any); cavities the ground truth lacks (inward-facing components beyond its own; total, and the shapes with any); the shapes whose output has the ground truth's genus and one component. The reference rows give the last column for the shared data's results on the same shapes (the other columns were not measured for them).\n",
-        rfta::consistency::SIGN_MARGIN,
-        rfta::consistency::ENTER_MARGIN,
-        rfta::consistency::THIN_LOOP
+        margins.sign, margins.enter, margins.thin_loop
     )?;
     writeln!(
         s,

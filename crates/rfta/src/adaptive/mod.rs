@@ -20,9 +20,9 @@
 //!    left without one get initial points of their own.
 //!
 //! The passes before the last only say where to ask: they reconstruct with at most
-//! [`GUIDE_ROUNDS`] fine-tuning rounds and end at the final solve with the components the
+//! `GUIDE_ROUNDS` (3) fine-tuning rounds and end at the final solve with the components the
 //! samples contradict removed (no spheres cleared, no cavities opened, no verdict). The last
-//! runs the caller's [`Params`], at the depth of [`FINAL_CELLS_PER_SPACING`] unless one is set.
+//! runs the caller's [`Params`], at the depth of `FINAL_CELLS_PER_SPACING` (2.0) unless one is set.
 //! A pass that would leave less than a quarter of the samples so far for another takes the
 //! rest of the budget itself. Every choice is a function of
 //! the values asked for (sorted lattice keys, errors ordered with ties broken by key), so a
@@ -52,7 +52,7 @@ pub type Oracle<'a> = dyn FnMut(&[DVec3]) -> std::result::Result<Vec<f64>, Oracl
 pub const MIN_BUDGET: usize = 125;
 
 /// Fine-tuning rounds of the passes before the last (their meshes only guide the next samples).
-pub const GUIDE_ROUNDS: usize = 3;
+pub(crate) const GUIDE_ROUNDS: usize = 3;
 
 /// How much an adaptive run may ask.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -245,10 +245,7 @@ pub fn reconstruct_adaptive(
 
 /// The share of the budget kept for the final pass's questions about small components and thin
 /// handles (`settle.rs`).
-pub const HANDLE_SHARE: f64 = 0.01;
-
-/// How far apart the two sides of a cut thin handle move, in finest spacings.
-const CUT_GAP: f64 = 0.05;
+pub(crate) const HANDLE_SHARE: f64 = 0.01;
 
 /// The last pass: the caller's parameters on every sample, the small components and thin handles
 /// settled by asking the function at most `left` times (`settle.rs`).
@@ -269,7 +266,7 @@ fn final_pass(
     // Loops up to THIN_LOOP base cells long: the coarsest spacing any part of the surface may
     // have been left at.
     let bound = crate::consistency::THIN_LOOP * lattice.base_spacing();
-    let gap = CUT_GAP * lattice.finest_spacing();
+    let gap = rfta_repair::CUT_GAP * lattice.finest_spacing();
     let small = lattice.base_spacing();
     let cancel = asker.cancel;
     let mut settle = |mesh: &mut rfta_geom::TriMesh, repair: &mut crate::RepairReport| {
@@ -325,7 +322,7 @@ fn final_pass(
 /// most of the run; one cell per spacing (depth 10) left samples' spheres entered (45 over the
 /// eight shapes at 30,000, 60 at 10,000, one sample on the wrong side), two (depth 11) 0 to 4
 /// per shape.
-pub const FINAL_CELLS_PER_SPACING: f64 = 2.0;
+pub(crate) const FINAL_CELLS_PER_SPACING: f64 = 2.0;
 
 /// The final pass's screened Poisson depth: [`FINAL_CELLS_PER_SPACING`] cells per finest
 /// spacing, on the box of the samples (the unit box the pipeline solves in).

@@ -23,13 +23,28 @@ use rfta_sphere_tree::SphereTree;
 use crate::normalize::UnitBox;
 use crate::report::{FinalSolveReport, Journal, RepairReport};
 use crate::rounds::Rounds;
-use crate::{Consistency, MeshCheck, Params, Report, Result, Stage, Step, check, consistency};
+use crate::{
+    Consistency, MeshCheck, Params, Report, Result, Stage, Step, Warning, check, consistency,
+};
 
 use islands::{inverted_and_unenclosed, judge};
 use rfta_repair::{
-    CLEAR_BELOW, CUT_GAP, Island, PUSH_DEPTH, clear_spheres, cut_sub_cell_handles, dent_wrong_side,
-    push_out_of_spheres, remove_islands, to_genus,
+    CUT_GAP, Island, clear_spheres, cut_sub_cell_handles, dent_wrong_side, push_out_of_spheres,
+    remove_islands, to_genus,
 };
+
+/// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
+/// margin at which the consistency check ([`crate::consistency`]) counts a sphere as entered, and large enough that the
+/// sphere tree prunes the many spheres the surface merely touches.
+pub(crate) const PUSH_DEPTH: f64 = 0.02;
+
+/// [`clear_spheres`](rfta_repair::clear_spheres) looks at spheres smaller than this many owner radii (`rfta::Params::owner_band`
+/// spacings on grids). A wider sphere tangent at the same point along the same normal enters a
+/// bulge at most by a few hundredths of a spacing more (a bulge `w` wide enters a sphere of
+/// radius `t` by about its height less `w^2 / 2t`): below the margin at which
+/// the consistency check ([`crate::consistency`]) counts an entry, where the many far spheres' queries would cost most
+/// (nine in ten of the 129^3 bunny's samples).
+pub(crate) const CLEAR_BELOW: f64 = 3.0;
 
 /// What the final solve and the repair hand back: the mesh and the final points in the input's
 /// coordinates, and the two stages' reports.
@@ -355,65 +370,56 @@ pub(crate) fn verdict(
     let n = samples.len();
     if let Some(genus) = params.genus {
         match topology.genus() {
-            Some(g) if g < genus as i64 => journal.warnings.push(format!(
-                "the mesh has genus {g}, below the {genus} asked: the samples show no more handles (a handle is never added)"
-            )),
-            Some(g) if g > genus as i64 => journal.warnings.push(format!(
-                "the mesh has genus {g}, above the {genus} asked: handles are cut on meshes of genus up to {}, along loops up to 64 spacings",
-                consistency::THIN_LOOP_MAX_GENUS
-            )),
+            Some(g) if g < genus as i64 => journal.warnings.push(Warning::GenusBelow {
+                genus: g,
+                asked: genus,
+            }),
+            Some(g) if g > genus as i64 => journal.warnings.push(Warning::GenusAbove {
+                genus: g,
+                asked: genus,
+            }),
             _ => {}
         }
     }
     if !c.is_consistent() {
-        journal.warnings.push(format!(
-            "the mesh disagrees with the samples: {} on the wrong side of it, {} whose sphere it enters by more than {} spacing (deepest: {:.2} spacings)",
-            c.sign_errors,
-            c.entered,
-            consistency::ENTER_MARGIN,
-            c.deepest_entry
-        ));
+        journal.warnings.push(Warning::Disagrees {
+            wrong_side: c.sign_errors,
+            entered: c.entered,
+            deepest: c.deepest_entry,
+        });
     }
     if report.repair.cavities > 0 {
-        let n = report.repair.cavities;
-        let what = if n == 1 { "y" } else { "ies" };
-        journal.warnings.push(if params.keep_cavities || samples.as_grid().is_none() {
-            format!(
-                "the mesh encloses {n} cavit{what} around samples outside the shape: unless the shape is hollow there, a hole or a gap the surface closed around them, which finer samples can open"
-            )
-        } else {
-            format!(
-                "the mesh encloses {n} cavit{what} around samples outside the shape that could not be opened: walled in by inside samples (a void the samples show), or closed again by the surface"
-            )
+        journal.warnings.push(Warning::Cavities {
+            count: report.repair.cavities,
+            kept: params.keep_cavities || samples.as_grid().is_none(),
         });
     }
     if let Some(&shortest) = c.thin_loops.first() {
-        journal.warnings.push(format!(
-            "the mesh has {} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, which the samples can neither confirm nor rule out; finer samples can",
-            c.thin_loops.len(),
-            consistency::THIN_LOOP
-        ));
+        journal.warnings.push(Warning::ThinHandles {
+            loops: c.thin_loops.len(),
+            shortest,
+        });
     }
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
     let eligible = n - report.final_solve.far_spheres;
     if report.final_solve.spheres_without_point * 20 > eligible {
-        journal.warnings.push(format!(
-            "{} of {eligible} spheres ended without a tangency point (clamped, zero-valued, or covered by other spheres)",
-            report.final_solve.spheres_without_point
-        ));
+        journal.warnings.push(Warning::SpheresWithoutPoint {
+            without: report.final_solve.spheres_without_point,
+            eligible,
+        });
     }
     if !checked.watertight {
-        journal.warnings.push(format!(
-            "the mesh is not watertight: {} boundary and {} non-manifold edges",
-            checked.boundary_edges, checked.nonmanifold_edges
-        ));
+        journal.warnings.push(Warning::NotWatertight {
+            boundary_edges: checked.boundary_edges,
+            nonmanifold_edges: checked.nonmanifold_edges,
+        });
     }
     if checked.zero_area_faces > 0 {
-        journal.warnings.push(format!(
-            "the mesh has {} faces of zero area ({} with a repeated vertex)",
-            checked.zero_area_faces, checked.degenerate_faces
-        ));
+        journal.warnings.push(Warning::ZeroAreaFaces {
+            faces: checked.zero_area_faces,
+            degenerate: checked.degenerate_faces,
+        });
     }
     Ok((checked, c))
 }
