@@ -11,8 +11,9 @@ use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
 use crate::params::Seeds;
+use crate::plan::Plan;
 use crate::report::{InitialReport, Journal, counted};
-use crate::{Error, Params, Result, Stage};
+use crate::{Error, Result, Stage};
 
 /// With [`crate::InitialPoints::Gradient`], a sign set is rasterized all the same when none or
 /// fewer than one in this many of its drawn spheres gives an empty-space point.
@@ -20,30 +21,25 @@ const GRADIENT_FLOOR: usize = 100;
 
 /// The initial tangency points, one sign set at a time: rasterize the set's spheres, take the
 /// nearest empty-space sample to each centre, make it feasible against a batch of the same set.
+/// `seeds` (an earlier run's points, in the caller's coordinates) start the spheres they still
+/// fit.
 pub(crate) fn initial_points(
-    unit: &UnitBox,
-    params: &Params,
+    plan: &Plan<'_>,
     seeds: Option<&TangentPoints>,
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<(TangentPoints, InitialReport)> {
-    let seeds = seeds.map(|s| feasible_seeds(unit, params, s));
+    let seeds = seeds.map(|s| feasible_seeds(plan, &plan.scaled(s)));
     // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
-    drawing(
-        unit,
-        params,
-        seeds,
-        unit.raster_radius(params),
-        journal,
-        progress,
-    )
+    drawing(plan, seeds, plan.raster_radius, journal, progress)
 }
 
-/// The seeds (in the input's coordinates) that can start this run, in the unit box: those whose
+/// The seeds (at the working scale) that can start this run, in the unit box: those whose
 /// owner is a sample here and that no other sphere holds by more than the feasibility tolerance
 /// (an earlier run's points, before the samples added since).
-fn feasible_seeds(unit: &UnitBox, params: &Params, seeds: &TangentPoints) -> TangentPoints {
+fn feasible_seeds(plan: &Plan<'_>, seeds: &TangentPoints) -> TangentPoints {
     use rayon::prelude::*;
+    let unit = &plan.unit;
     let all = SphereTree::new(&unit.spheres);
     let kept: Vec<usize> = (0..seeds.len())
         .into_par_iter()
@@ -52,7 +48,7 @@ fn feasible_seeds(unit: &UnitBox, params: &Params, seeds: &TangentPoints) -> Tan
             (owner as usize) < unit.len()
                 && !all.inside_any(
                     unit.to_unit(seeds.points[k]),
-                    -params.tolerance,
+                    -plan.params.tolerance,
                     Some(owner),
                 )
         })
@@ -69,8 +65,7 @@ fn feasible_seeds(unit: &UnitBox, params: &Params, seeds: &TangentPoints) -> Tan
 
 /// [`initial_points`] rasterizing the spheres smaller than `reach`.
 fn drawing(
-    unit: &UnitBox,
-    params: &Params,
+    plan: &Plan<'_>,
     seeds: Option<TangentPoints>,
     reach: f64,
     journal: &mut Journal,
@@ -78,18 +73,12 @@ fn drawing(
 ) -> Result<(TangentPoints, InitialReport)> {
     progress(Stage::Initial);
     let t = Instant::now();
+    let (unit, params) = (&plan.unit, &plan.params);
     let n = unit.len();
-    let res = params.raster_resolution_for(n);
     let mut report = InitialReport {
-        raster_resolution: res,
+        raster_resolution: params.raster_resolution_for(n),
         ..InitialReport::default()
     };
-    let backend = if params.gpu {
-        rfta_raster::Backend::Gpu
-    } else {
-        rfta_raster::Backend::Cpu
-    };
-    let fparams = params.feasible_params(n, unit.owner_radius(params), unit.owner_scale());
     let values = &unit.values;
     let neg: Vec<u32> = (0..n as u32)
         .filter(|&i| values[i as usize] < 0.0)
@@ -132,46 +121,7 @@ fn drawing(
             .collect();
         crate::pool::waiters_back();
         let t_raster = Instant::now();
-        let from_gradient = match params.initial {
-            crate::InitialPoints::Gradient => unit
-                .gradient_points(set, |i| drawn(i) && unit.spheres[i].radius < unit.clamp)
-                .map(|points| {
-                    // Empty space: the points outside every drawn sphere of the set.
-                    let all = SphereTree::with_indices(
-                        &unit.spheres,
-                        &draw.iter().map(|&i| i as u32).collect::<Vec<_>>(),
-                    );
-                    let tol = params.tolerance;
-                    use rayon::prelude::*;
-                    points
-                        .into_par_iter()
-                        .filter(|&q| !all.inside_any(q, -tol, None))
-                        .collect::<Vec<_>>()
-                })
-                // Values that are not a distance near the surface (a lone sample of one sign
-                // among the other's) leave the gradients little empty space: rasterize then.
-                .filter(|p| !p.is_empty() && p.len() * GRADIENT_FLOOR >= draw.len()),
-            crate::InitialPoints::Raster => None,
-        };
-        let empty_points = match from_gradient {
-            Some(points) => {
-                report.raster_resolution = 0;
-                points
-            }
-            None => {
-                let c: Vec<DVec3> = draw.iter().map(|&i| unit.spheres[i].center).collect();
-                let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
-                let raster = params.raster_params(res, negative);
-                let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
-                if draw.len() < set.len() {
-                    // Where the drawn spheres end and the larger ones would begin.
-                    empty
-                        .points
-                        .retain(|&w| unit.nearest_sample(w).is_none_or(drawn));
-                }
-                empty.points
-            }
-        };
+        let empty_points = empty_space(plan, set, &draw, reach, negative, &mut report)?;
         raster_time += t_raster.elapsed();
         report.empty_space_points += empty_points.len();
         let batch = draw_batch(
@@ -188,7 +138,7 @@ fn drawing(
                 &unseeded,
                 &empty_points,
                 &tree,
-                &fparams,
+                &plan.feasible,
                 Some(done),
             )
         }));
@@ -223,6 +173,62 @@ fn drawing(
         });
     }
     Ok((cloud, report))
+}
+
+/// Empty space next to the spheres of the sign set `set` (the `draw`n ones among them): on a grid
+/// the points their gradients point to outside them ([`crate::InitialPoints::Gradient`]), else
+/// the rasterization's samples (`report.raster_resolution` 0 when no set was rasterized).
+fn empty_space(
+    plan: &Plan<'_>,
+    set: &[u32],
+    draw: &[usize],
+    reach: f64,
+    negative: bool,
+    report: &mut InitialReport,
+) -> Result<Vec<DVec3>> {
+    let (unit, params) = (&plan.unit, &plan.params);
+    let drawn = |i: usize| unit.spheres[i].radius < reach;
+    let from_gradient = match params.initial {
+        crate::InitialPoints::Gradient => unit
+            .gradient_points(set, |i| drawn(i) && unit.spheres[i].radius < unit.clamp)
+            .map(|points| {
+                // Empty space: the points outside every drawn sphere of the set.
+                let all = SphereTree::with_indices(
+                    &unit.spheres,
+                    &draw.iter().map(|&i| i as u32).collect::<Vec<_>>(),
+                );
+                let tol = params.tolerance;
+                use rayon::prelude::*;
+                points
+                    .into_par_iter()
+                    .filter(|&q| !all.inside_any(q, -tol, None))
+                    .collect::<Vec<_>>()
+            })
+            // Values that are not a distance near the surface (a lone sample of one sign
+            // among the other's) leave the gradients little empty space: rasterize then.
+            .filter(|p| !p.is_empty() && p.len() * GRADIENT_FLOOR >= draw.len()),
+        crate::InitialPoints::Raster => None,
+    };
+    if let Some(points) = from_gradient {
+        report.raster_resolution = 0;
+        return Ok(points);
+    }
+    let c: Vec<DVec3> = draw.iter().map(|&i| unit.spheres[i].center).collect();
+    let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
+    let raster = params.raster_params(params.raster_resolution_for(unit.len()), negative);
+    let backend = if params.gpu {
+        rfta_raster::Backend::Gpu
+    } else {
+        rfta_raster::Backend::Cpu
+    };
+    let mut empty = rfta_raster::rasterize(&c, &r, &raster, backend)?;
+    if draw.len() < set.len() {
+        // Where the drawn spheres end and the larger ones would begin.
+        empty
+            .points
+            .retain(|&w| unit.nearest_sample(w).is_none_or(drawn));
+    }
+    Ok(empty.points)
 }
 
 /// The points of `cloud` (in the unit box) that lie in the box of the samples.
@@ -276,12 +282,23 @@ fn merge_by_owner(parts: Vec<TangentPoints>) -> TangentPoints {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Params;
     use rfta_geom::{Grid, SdfSamples};
 
     const TORUS: rfta_testkit::Analytic = rfta_testkit::Analytic::Torus {
         major: 0.5,
         minor: 0.2,
     };
+
+    /// The plan of a run that rasterizes, on samples taken as they are (no input check).
+    fn raster_plan(samples: &SdfSamples) -> Plan<'_> {
+        let params = Params {
+            initial: crate::InitialPoints::Raster,
+            check: false,
+            ..Params::default()
+        };
+        Plan::new(samples, &params, &mut Journal::default()).expect("plan")
+    }
 
     /// [`TORUS`]'s exact SDF on the 41^3 grid over [-1, 1]^3 (spacing 0.05).
     fn torus_values() -> Vec<f64> {
@@ -299,32 +316,22 @@ mod tests {
     fn drawing_the_near_spheres_gives_the_points_of_drawing_all() {
         let samples = SdfSamples::grid(Grid::cube(40, -1.0, 1.0).expect("grid"), torus_values())
             .expect("samples");
-        let params = Params {
-            initial: crate::InitialPoints::Raster,
-            ..Params::default()
-        };
-        let unit = UnitBox::new(&samples, None, None);
-        let reach = unit.raster_radius(&params);
+        let plan = raster_plan(&samples);
+        let unit = &plan.unit;
+        let reach = plan.raster_radius;
         let undrawn = unit.spheres.iter().filter(|s| s.radius >= reach).count();
         assert!(undrawn * 4 > unit.len(), "{undrawn} of {}", unit.len());
         let run = |reach: f64| {
-            drawing(
-                &unit,
-                &params,
-                None,
-                reach,
-                &mut Journal::default(),
-                &mut |_| {},
-            )
-            .expect("points")
-            .0
+            drawing(&plan, None, reach, &mut Journal::default(), &mut |_| {})
+                .expect("points")
+                .0
         };
         let all = run(f64::INFINITY);
         let near = run(reach);
         assert!(all.len() > 1000, "{}", all.len());
         assert_eq!(near.owners, all.owners);
         assert_eq!(near.points, all.points);
-        assert_ne!(run(unit.owner_radius(&params)).points, all.points);
+        assert_ne!(run(plan.owner_radius).points, all.points);
     }
 
     /// On a grid of a torus's exact SDF (41^3, spacing 0.05), the point each sample near the
@@ -370,14 +377,10 @@ mod tests {
                 .collect()
         })
         .expect("samples");
-        let params = Params {
-            initial: crate::InitialPoints::Raster,
-            ..Params::default()
-        };
-        let unit = UnitBox::new(&samples, None, None);
+        let plan = raster_plan(&samples);
+        let unit = &plan.unit;
         let run = |seeds: Option<&TangentPoints>| {
-            initial_points(&unit, &params, seeds, &mut Journal::default(), &mut |_| {})
-                .expect("points")
+            initial_points(&plan, seeds, &mut Journal::default(), &mut |_| {}).expect("points")
         };
         let (own, report) = run(None);
         assert!(own.len() > 300, "{}", own.len());

@@ -51,6 +51,7 @@ mod initial;
 mod memory;
 mod normalize;
 mod params;
+mod plan;
 pub mod plane;
 mod pool;
 mod report;
@@ -77,8 +78,7 @@ pub use warning::Warning;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use rfta_feasible::TangentPoints;
-use rfta_geom::{SdfSamples, TriMesh};
+use rfta_geom::SdfSamples;
 
 /// Errors of a reconstruction.
 #[derive(Debug, thiserror::Error)]
@@ -211,158 +211,33 @@ pub fn reconstruct_cancellable(
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
 ) -> Result<Reconstruction> {
-    reconstruct_settling(samples, params, None, progress, cancel, Ending::Full(None))
-}
-
-/// A last edit of the repaired mesh, in the samples' coordinates, before the verdict measures it
-/// (an adaptive run's thin handles settled by asking the function).
-pub(crate) type Settle<'a> =
-    &'a mut (dyn FnMut(&mut TriMesh, &mut RepairReport) -> Result<()> + Send);
-
-/// How a run ends after the fine-tuning rounds.
-pub(crate) enum Ending<'a> {
-    /// The final solve, the repair, the cavities opened, a [`Settle`] step if given, and the
-    /// verdict: the output a caller gets.
-    Full(Option<Settle<'a>>),
-    /// The final solve with the components the samples contradict removed, and nothing more:
-    /// an adaptive guide pass's mesh, which only says where to ask next (its report holds the
-    /// steps up to the rounds; its points are the rounds' last, which the next pass starts
-    /// from).
-    Guide,
-}
-
-/// [`reconstruct_cancellable`] ending as `ending` says, starting from `seeds` where given:
-/// tangency points of an earlier run on a prefix of these samples (owners are sample indices,
-/// positions in the samples' coordinates), kept where still feasible; only the spheres left
-/// without one get initial points of their own.
-pub(crate) fn reconstruct_settling(
-    samples: &SdfSamples,
-    params: &Params,
-    seeds: Option<&TangentPoints>,
-    progress: &mut (dyn FnMut(Stage) + Send),
-    cancel: &AtomicBool,
-    ending: Ending<'_>,
-) -> Result<Reconstruction> {
-    params.validate()?;
-    check_memory(samples.len(), params)?;
-    if let Some((scaled, factor)) = normalize::working_scale(samples) {
-        // Reconstructed at a scale of ordinary size, then scaled back (exactly: a power of two).
-        let params = Params {
-            clamp: params.clamp.map(|c| c * factor),
-            ..params.clone()
+    let go_on = || go_on(cancel);
+    // Each stage takes the values the one before returned and gives back its own report; the
+    // warnings and the timings go to the journal, in order; the verdict reads them all.
+    plan::with_plan(samples, params, |plan, mut journal| {
+        go_on()?;
+        let (cloud, initial) = initial::initial_points(&plan, None, &mut journal, progress)?;
+        let (cloud, rounds) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
+        go_on()?;
+        let (mesh, mut final_solve) = finish::final_solve(&plan, &cloud, &mut journal, progress)?;
+        let (mesh, repair) = finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
+        let report = Report {
+            input: plan.input.clone(),
+            initial,
+            rounds,
+            final_solve,
+            repair,
+            ..Report::default()
         };
-        // The settle step sees the samples' own coordinates.
-        let guide = matches!(ending, Ending::Guide);
-        let mut scaled_settle = match ending {
-            Ending::Full(Some(f)) => Some(
-                move |mesh: &mut TriMesh, repair: &mut RepairReport| -> Result<()> {
-                    mesh.map_vertices(|v| v / factor);
-                    let r = f(mesh, repair);
-                    mesh.map_vertices(|v| v * factor);
-                    r
-                },
-            ),
-            _ => None,
-        };
-        let ending = if guide {
-            Ending::Guide
-        } else {
-            Ending::Full(scaled_settle.as_mut().map(|f| f as Settle<'_>))
-        };
-        let seeds = seeds.map(|s| TangentPoints {
-            points: s.points.iter().map(|&p| p * factor).collect(),
-            normals: s.normals.clone(),
-            owners: s.owners.clone(),
-        });
-        let mut out = pool::on_pool(params.threads, || {
-            run(&scaled, &params, seeds.as_ref(), progress, cancel, ending)
-        })?;
-        out.mesh.map_vertices(|v| v / factor);
-        for p in &mut out.points.points {
-            *p /= factor;
-        }
-        out.report.input.clamp = out.report.input.clamp.map(|c| c / factor);
-        out.report.consistency.spacing /= factor;
-        return Ok(out);
-    }
-    pool::on_pool(params.threads, || {
-        run(samples, params, seeds, progress, cancel, ending)
+        finish::verdict(&plan, mesh, cloud, report, journal)
     })
 }
 
-/// The six steps.
-fn run(
-    samples: &SdfSamples,
-    params: &Params,
-    seeds: Option<&TangentPoints>,
-    progress: &mut (dyn FnMut(Stage) + Send),
-    cancel: &AtomicBool,
-    ending: Ending<'_>,
-) -> Result<Reconstruction> {
-    let go_on = || {
-        if cancel.load(Ordering::Relaxed) {
-            Err(Error::Cancelled)
-        } else {
-            Ok(())
-        }
-    };
-    // Each stage returns its output and its own report; the warnings and the timings go to
-    // the journal, in order; the verdict reads them all.
-    let mut journal = report::Journal::default();
-    let input = if params.check {
-        let t = std::time::Instant::now();
-        let input = check::samples(samples, params, &mut journal)?;
-        journal.timed(Step::InputCheck, t);
-        input
+/// [`Error::Cancelled`] once `cancel` is set.
+pub(crate) fn go_on(cancel: &AtomicBool) -> Result<()> {
+    if cancel.load(Ordering::Relaxed) {
+        Err(Error::Cancelled)
     } else {
-        report::InputReport {
-            samples: samples.len(),
-            clamp: params.clamp,
-            ..report::InputReport::default()
-        }
-    };
-    go_on()?;
-    let unit = normalize::UnitBox::new(samples, input.clamp, input.radius_scale);
-    let (cloud, initial) = initial::initial_points(&unit, params, seeds, &mut journal, progress)?;
-    let mut rounds = rounds::Rounds::new(&unit, params, cloud);
-    let rounds_report = rounds.run(&unit, params, &mut journal, progress, &go_on)?;
-    go_on()?;
-    let settle = match ending {
-        Ending::Full(settle) => settle,
-        Ending::Guide => {
-            let (mesh, points) = finish::guide(&unit, params, rounds, &mut journal, progress)?;
-            return Ok(Reconstruction {
-                mesh,
-                points,
-                report: Report {
-                    input,
-                    initial,
-                    rounds: rounds_report,
-                    timings: journal.timings,
-                    ..Report::default()
-                },
-            });
-        }
-    };
-    let mut finished = finish::finish(samples, &unit, params, rounds, &mut journal, progress)?;
-    if let Some(settle) = settle {
-        settle(&mut finished.mesh, &mut finished.repair)?;
+        Ok(())
     }
-    let mut report = Report {
-        input,
-        initial,
-        rounds: rounds_report,
-        final_solve: finished.final_solve,
-        repair: finished.repair,
-        ..Report::default()
-    };
-    (report.mesh, report.consistency) =
-        finish::verdict(params, samples, &finished.mesh, &report, &mut journal)?;
-    report.warnings = journal.warnings;
-    report.timings = journal.timings;
-    Ok(Reconstruction {
-        mesh: finished.mesh,
-        points: finished.points,
-        report,
-    })
 }

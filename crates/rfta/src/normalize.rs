@@ -4,8 +4,6 @@ use rfta_feasible::TangentPoints;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Grid, SdfSamples, Sphere};
 
-use crate::{Params, RASTER_REACH};
-
 /// The side points of the final solve ([`UnitBox::sides`]): index `i` below the sample count is
 /// sample `i` when its value is beyond the margin, the rest are the extra points.
 pub(crate) struct SampleSides<'a> {
@@ -160,20 +158,9 @@ impl UnitBox {
         }
     }
 
-    /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
-    /// [`Params::owner_band`] sample spacings when that is smaller. They stay constraints.
-    pub(crate) fn owner_radius(&self, params: &Params) -> f64 {
-        let band = match params.owner_band {
-            Some(k) if self.grid.is_some() => k * self.spacing(),
-            _ => f64::INFINITY,
-        };
-        self.clamp.min(band)
-    }
-
-    /// Spheres at least this large are not rasterized ([`RASTER_REACH`] owner radii; none
-    /// without an owner band).
-    pub(crate) fn raster_radius(&self, params: &Params) -> f64 {
-        RASTER_REACH * self.owner_radius(params)
+    /// Whether the samples lie on a grid.
+    pub(crate) fn on_grid(&self) -> bool {
+        self.grid.is_some()
     }
 
     /// On a grid, for each sample of `set` that `keep` takes, the point its gradient points to
@@ -278,19 +265,6 @@ impl UnitBox {
             }
         }
         out
-    }
-
-    /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
-    /// clamped ones).
-    pub(crate) fn far_spheres(&self, params: &Params) -> usize {
-        let r = self.owner_radius(params);
-        if r >= self.clamp {
-            return 0;
-        }
-        self.spheres
-            .iter()
-            .filter(|s| s.radius >= r && s.radius < self.clamp)
-            .count()
     }
 
     /// The sample spacing in the unit box.

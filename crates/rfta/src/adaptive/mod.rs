@@ -39,7 +39,11 @@ use rfta_geom::glam::DVec3;
 use rfta_geom::{Aabb, SdfSamples};
 use rfta_mesh::MeshIndex;
 
-use crate::{Ending, Error, Params, Reconstruction, Result, Stage};
+use rfta_feasible::TangentPoints;
+use rfta_geom::TriMesh;
+
+use crate::plan::with_plan;
+use crate::{Error, Params, Reconstruction, Result, Stage, finish, initial, rounds};
 use lattice::{Cell, Lattice};
 
 /// What an oracle's failure carries back: the caller's own error.
@@ -214,19 +218,12 @@ pub fn reconstruct_adaptive(
         let t = Instant::now();
         let oracle_before = asker.seconds;
         let samples = lattice.samples()?;
-        let rec = crate::reconstruct_settling(
-            &samples,
-            &guide,
-            seeds.as_ref(),
-            progress,
-            cancel,
-            Ending::Guide,
-        )?;
+        let (mesh, points) = guide_pass(&samples, &guide, seeds.as_ref(), progress, cancel)?;
         let mut pass = Pass {
             samples: samples.len(),
             ..Pass::default()
         };
-        let index = MeshIndex::new(&rec.mesh)?;
+        let index = MeshIndex::new(&mesh)?;
         let done = refine_where_wrong(&mut lattice, &index, &mut asker, spend, budget, &mut pass)?;
         pass.oracle_seconds = asker.seconds - oracle_before;
         pass.rfta_seconds = t.elapsed().as_secs_f64() - pass.oracle_seconds;
@@ -239,8 +236,35 @@ pub fn reconstruct_adaptive(
                 lattice, &mut asker, left, params, seeds, report, progress, on_pass,
             );
         }
-        seeds = Some(rec.points);
+        seeds = Some(points);
     }
+}
+
+/// A pass before the last: the stages up to the fine-tuning rounds, started from `seeds`, then
+/// the guide surface ([`finish::guide`]); the surface and the rounds' points in the caller's
+/// coordinates (the next pass starts from them).
+fn guide_pass(
+    samples: &SdfSamples,
+    params: &Params,
+    seeds: Option<&TangentPoints>,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
+) -> Result<(TriMesh, TangentPoints)> {
+    let go_on = || crate::go_on(cancel);
+    with_plan(samples, params, |plan, mut journal| {
+        go_on()?;
+        let (cloud, _) = initial::initial_points(&plan, seeds, &mut journal, progress)?;
+        let (cloud, _) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
+        go_on()?;
+        let mesh = finish::guide(&plan, &cloud, &mut journal, progress)?;
+        let points = plan.unit.points_to_input(cloud);
+        let out = plan.to_caller(Reconstruction {
+            mesh,
+            points,
+            report: crate::Report::default(),
+        });
+        Ok((out.mesh, out.points))
+    })
 }
 
 /// The share of the budget kept for the final pass's questions about small components and thin
@@ -269,29 +293,44 @@ fn final_pass(
     let gap = rfta_repair::CUT_GAP * lattice.finest_spacing();
     let small = lattice.base_spacing();
     let cancel = asker.cancel;
-    let mut settle = |mesh: &mut rfta_geom::TriMesh, repair: &mut crate::RepairReport| {
-        let mut ask = |p: &[DVec3]| asker.values(p);
-        let (asked, removed) = settle::settle_components(mesh, &samples, small, left, &mut ask)?;
-        repair.small_components_asked = asked;
-        repair.small_components_removed = removed;
-        let s = settle::settle(mesh, &samples, bound, gap, left - 2 * asked, &mut ask)?;
-        repair.thin_handles_asked = s.asked;
-        repair.thin_handles_cut = s.cut;
-        repair.cavities = rfta_mesh::cavities(mesh).len();
-        Ok(())
-    };
     let params = Params {
         spsr_depth: params.spsr_depth.or(Some(final_depth(&lattice))),
         ..params.clone()
     };
-    let rec = crate::reconstruct_settling(
-        &samples,
-        &params,
-        seeds.as_ref(),
-        progress,
-        cancel,
-        Ending::Full(Some(&mut settle)),
-    )?;
+    let go_on = || crate::go_on(cancel);
+    let rec = with_plan(&samples, &params, |plan, mut journal| {
+        go_on()?;
+        let seeds = seeds.as_ref();
+        let (cloud, initial) = initial::initial_points(&plan, seeds, &mut journal, progress)?;
+        let (cloud, rounds) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
+        go_on()?;
+        let (mesh, mut final_solve) = finish::final_solve(&plan, &cloud, &mut journal, progress)?;
+        let (mut mesh, mut repair) =
+            finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
+        // The small components and thin handles settled by asking the function, in its own
+        // coordinates.
+        plan.in_caller_scale(&mut mesh, |mesh| {
+            let mut ask = |p: &[DVec3]| asker.values(p);
+            let (asked, removed) =
+                settle::settle_components(mesh, &samples, small, left, &mut ask)?;
+            repair.small_components_asked = asked;
+            repair.small_components_removed = removed;
+            let s = settle::settle(mesh, &samples, bound, gap, left - 2 * asked, &mut ask)?;
+            repair.thin_handles_asked = s.asked;
+            repair.thin_handles_cut = s.cut;
+            repair.cavities = rfta_mesh::cavities(mesh).len();
+            Ok::<_, Error>(())
+        })?;
+        let report = crate::Report {
+            input: plan.input.clone(),
+            initial,
+            rounds,
+            final_solve,
+            repair,
+            ..crate::Report::default()
+        };
+        finish::verdict(&plan, mesh, cloud, report, journal)
+    })?;
     let oracle_seconds = asker.seconds - oracle_before;
     let pass = Pass {
         samples: samples.len(),

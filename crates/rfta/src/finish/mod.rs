@@ -21,10 +21,11 @@ use rfta_geom::{SdfSamples, TriMesh};
 use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
+use crate::plan::Plan;
 use crate::report::{FinalSolveReport, Journal, RepairReport};
-use crate::rounds::Rounds;
 use crate::{
-    Consistency, MeshCheck, Params, Report, Result, Stage, Step, Warning, check, consistency,
+    Consistency, MeshCheck, Reconstruction, Report, Result, Stage, Step, Warning, check,
+    consistency,
 };
 
 use islands::{inverted_and_unenclosed, judge};
@@ -46,65 +47,59 @@ pub(crate) const PUSH_DEPTH: f64 = 0.02;
 /// (nine in ten of the 129^3 bunny's samples).
 pub(crate) const CLEAR_BELOW: f64 = 3.0;
 
-/// What the final solve and the repair hand back: the mesh and the final points in the input's
-/// coordinates, and the two stages' reports.
-pub(crate) struct Finished {
-    pub(crate) mesh: TriMesh,
-    pub(crate) points: TangentPoints,
-    pub(crate) final_solve: FinalSolveReport,
-    pub(crate) repair: RepairReport,
-}
-
-/// The last solve on the final points, then the repair; then, unless [`Params::keep_cavities`],
-/// the cavities the samples leave open opened ([`open_cavities`]).
-pub(crate) fn finish(
-    samples: &SdfSamples,
-    unit: &UnitBox,
-    params: &Params,
-    rounds: Rounds,
+/// The last solve on the final points (every sample a side point): its mesh at the working
+/// scale, and the counts of the spheres that own no point.
+pub(crate) fn final_solve(
+    plan: &Plan<'_>,
+    cloud: &TangentPoints,
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
-) -> Result<Finished> {
+) -> Result<(TriMesh, FinalSolveReport)> {
     progress(Stage::Final);
-    let cloud = rounds.cloud;
-    let (mesh, mut final_solve) = final_solve(unit, params, &cloud, &[], journal)?;
-    let cell = final_solve.finest_cell;
-    let (mut mesh, mut repair) = repair(samples, unit, params, mesh, cell, journal);
-    if !params.keep_cavities
+    solve_with(plan, cloud, &[], journal)
+}
+
+/// The repair of the final solve's mesh ([`repair_once`]); then, unless
+/// [`crate::Params::keep_cavities`], the cavities the samples leave open opened ([`open_cavities`]),
+/// whose re-solve replaces `final_solve`'s side errors when its surface is kept.
+pub(crate) fn repair(
+    plan: &Plan<'_>,
+    cloud: &TangentPoints,
+    mesh: TriMesh,
+    final_solve: &mut FinalSolveReport,
+    journal: &mut Journal,
+) -> Result<(TriMesh, RepairReport)> {
+    let (mut mesh, mut repair) = repair_once(plan, mesh, final_solve.finest_cell, journal);
+    if !plan.params.keep_cavities
         && repair.cavities > 0
-        && let Some(grid) = samples.as_grid()
+        && let Some(grid) = plan.samples.as_grid()
     {
         let t = Instant::now();
-        let opened = open_cavities(samples, grid, unit, params, &cloud, mesh, repair)?;
+        let opened = open_cavities(plan, grid, cloud, mesh, repair)?;
         (mesh, repair) = (opened.mesh, opened.repair);
         if let Some(side_errors) = opened.side_errors {
             final_solve.side_errors = side_errors;
         }
         journal.timed(Step::Cavities, t);
     }
-    Ok(Finished {
-        mesh,
-        points: unit.points_to_input(cloud),
-        final_solve,
-        repair,
-    })
+    Ok((mesh, repair))
 }
 
 /// The final screened Poisson solve (every sample a side point, [`UnitBox::sides`], and
 /// `extra` ones), its mesh in the samples' coordinates, and the counts of the spheres that own
 /// no point.
-fn final_solve(
-    unit: &UnitBox,
-    params: &Params,
+fn solve_with(
+    plan: &Plan<'_>,
     cloud: &TangentPoints,
     extra: &[rfta_spsr::SidePoint],
     journal: &mut Journal,
 ) -> Result<(TriMesh, FinalSolveReport)> {
+    let unit = &plan.unit;
     let mut report = FinalSolveReport::default();
     crate::pool::waiters_back();
     let t = Instant::now();
     let sides = unit.sides(extra);
-    let solved = crate::rounds::solve(cloud, &sides, &params.spsr_params(Some(unit.spacing())))?;
+    let solved = crate::rounds::solve(cloud, &sides, &plan.final_spsr)?;
     report.side_errors = solved.report.side_errors;
     report.finest_cell = unit.to_input_length(solved.report.finest_cell);
     let mut mesh = solved.mesh;
@@ -112,7 +107,7 @@ fn final_solve(
     let n = unit.len();
     let mut owners = cloud.owners.clone();
     owners.dedup();
-    report.far_spheres = unit.far_spheres(params);
+    report.far_spheres = plan.far_spheres();
     report.spheres_without_point = n.saturating_sub(owners.len() + report.far_spheres);
     mesh.map_vertices(|v| unit.to_input(v));
     Ok((mesh, report))
@@ -133,16 +128,14 @@ struct Opened {
 /// ([`rfta_repair::cavity_openings`]: outside samples in a cavity next to outside samples beyond
 /// the surface on the grid), with a point in each such gap kept outside, and repairs again; a
 /// result is kept when it has fewer cavities, at most [`CAVITY_PASSES`] times.
-#[allow(clippy::too_many_arguments)]
 fn open_cavities(
-    samples: &SdfSamples,
+    plan: &Plan<'_>,
     grid: &rfta_geom::Grid,
-    unit: &UnitBox,
-    params: &Params,
     cloud: &TangentPoints,
     mesh: TriMesh,
     repair_report: RepairReport,
 ) -> Result<Opened> {
+    let unit = &plan.unit;
     let mut best = Opened {
         mesh,
         repair: repair_report,
@@ -166,8 +159,8 @@ fn open_cavities(
         );
         // The re-solve's and the repair's own steps are timed together as one.
         let mut scratch = Journal::default();
-        let (mesh, solve) = final_solve(unit, params, cloud, &extra, &mut scratch)?;
-        let (mesh, repair) = repair(samples, unit, params, mesh, solve.finest_cell, &mut scratch);
+        let (mesh, solve) = solve_with(plan, cloud, &extra, &mut scratch)?;
+        let (mesh, repair) = repair_once(plan, mesh, solve.finest_cell, &mut scratch);
         if repair.cavities >= best.repair.cavities {
             break;
         }
@@ -181,7 +174,7 @@ fn open_cavities(
         }
     }
     if best.repair.cavities > 0 {
-        tunnel(samples, grid, unit, &mut best);
+        tunnel(&plan.samples, grid, unit, &mut best);
     }
     best.repair.cavities_opened = found - best.repair.cavities;
     Ok(best)
@@ -227,12 +220,8 @@ fn tunnel(samples: &SdfSamples, grid: &rfta_geom::Grid, unit: &UnitBox, best: &m
 /// The components the samples contradict or do not witness removed (`rfta_repair::remove_islands`
 /// with the verdicts of `islands.rs`): the mesh left, and how many were removed as small islands
 /// and as unsupported.
-fn components(
-    unit: &UnitBox,
-    params: &Params,
-    mesh: TriMesh,
-    journal: &mut Journal,
-) -> (TriMesh, [usize; 2]) {
+fn components(plan: &Plan<'_>, mesh: TriMesh, journal: &mut Journal) -> (TriMesh, [usize; 2]) {
+    let (unit, params) = (&plan.unit, &plan.params);
     crate::pool::waiters_back();
     let t = Instant::now();
     // The largest component in the unit box and the whole mesh, indexed on first use.
@@ -261,21 +250,17 @@ fn components(
     )
 }
 
-/// An adaptive guide pass's ending ([`crate::Ending::Guide`]): the final solve on the rounds'
-/// points with the components the samples contradict removed; no sphere cleared, no cavity
-/// opened, no verdict. Its mesh only says where the next samples are asked for; its points (in
-/// the input's coordinates) are where the next pass starts.
+/// An adaptive guide pass's surface: the final solve on the rounds' points with the components
+/// the samples contradict removed; no sphere cleared, no cavity opened, no verdict. It only says
+/// where the next samples are asked for.
 pub(crate) fn guide(
-    unit: &UnitBox,
-    params: &Params,
-    rounds: Rounds,
+    plan: &Plan<'_>,
+    cloud: &TangentPoints,
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
-) -> Result<(TriMesh, TangentPoints)> {
-    progress(Stage::Final);
-    let (mesh, _) = final_solve(unit, params, &rounds.cloud, &[], journal)?;
-    let mesh = components(unit, params, mesh, journal).0;
-    Ok((mesh, unit.points_to_input(rounds.cloud)))
+) -> Result<TriMesh> {
+    let (mesh, _) = final_solve(plan, cloud, journal, progress)?;
+    Ok(components(plan, mesh, journal).0)
 }
 
 /// Repair: components the samples contradict or do not witness removed, the handles narrower
@@ -283,17 +268,15 @@ pub(crate) fn guide(
 /// wrong side dented past, vertices inside near sample spheres pushed out and
 /// every sphere up to [`CLEAR_BELOW`] owner radii cleared, dents again, a known genus reached,
 /// the cavities counted.
-fn repair(
-    samples: &SdfSamples,
-    unit: &UnitBox,
-    params: &Params,
+fn repair_once(
+    plan: &Plan<'_>,
     mut mesh: TriMesh,
     cell: f64,
     journal: &mut Journal,
 ) -> (TriMesh, RepairReport) {
+    let (samples, unit, params) = (&*plan.samples, &plan.unit, &plan.params);
     let mut report = RepairReport::default();
-    (mesh, [report.islands_removed, report.unsupported_removed]) =
-        components(unit, params, mesh, journal);
+    (mesh, [report.islands_removed, report.unsupported_removed]) = components(plan, mesh, journal);
     // Before the clearing, which then clears what the caps enter.
     let t = Instant::now();
     report.sub_cell_handles_cut = cut_sub_cell_handles(
@@ -309,7 +292,7 @@ fn repair(
     // First radially out of the spheres that own points (near the surface and small, so the
     // tree prunes well), then out of every sphere up to CLEAR_BELOW owner radii, along the normal
     // where that is shorter, with faces split where they cut a sphere no vertex is in.
-    let r_own = unit.owner_radius(params);
+    let r_own = plan.owner_radius;
     let near: Vec<u32> = (0..unit.len() as u32)
         .filter(|&i| unit.spheres[i as usize].radius < r_own)
         .collect();
@@ -351,16 +334,35 @@ fn repair(
     (mesh, report)
 }
 
-/// The verdict on the output mesh, read with the stages' reports: the mesh checked
-/// ([`check::mesh`]) and measured against every sample ([`consistency::measure_with`]), and a
-/// warning for each thing the caller should know.
+/// The verdict on the output mesh ([`measure`]) completes `report` with it and the journal's
+/// warnings and timings; the mesh and the points in the caller's coordinates.
 pub(crate) fn verdict(
-    params: &Params,
-    samples: &SdfSamples,
+    plan: &Plan<'_>,
+    mesh: TriMesh,
+    cloud: TangentPoints,
+    mut report: Report,
+    mut journal: Journal,
+) -> Result<Reconstruction> {
+    (report.mesh, report.consistency) = measure(plan, &mesh, &report, &mut journal)?;
+    report.warnings = journal.warnings;
+    report.timings = journal.timings;
+    Ok(plan.to_caller(Reconstruction {
+        mesh,
+        points: plan.unit.points_to_input(cloud),
+        report,
+    }))
+}
+
+/// The output mesh, read with the stages' reports: checked ([`check::mesh`]) and measured
+/// against every sample ([`consistency::measure_with`]), and a warning for each thing the caller
+/// should know.
+fn measure(
+    plan: &Plan<'_>,
     mesh: &TriMesh,
     report: &Report,
     journal: &mut Journal,
 ) -> Result<(MeshCheck, Consistency)> {
+    let (samples, params) = (&*plan.samples, &plan.params);
     crate::pool::waiters_back();
     let t = Instant::now();
     let topology = rfta_mesh::Topology::of(mesh);

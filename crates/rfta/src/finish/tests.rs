@@ -8,6 +8,7 @@ use rfta_repair::{Island, clear_spheres, push_out_of_spheres, remove_islands};
 
 use super::islands::*;
 use super::*;
+use crate::Params;
 
 /// The exact distance to the sphere of radius 0.5 on the 21^3 grid over [-1, 1]^3.
 fn ball_grid() -> SdfSamples {
@@ -283,16 +284,25 @@ fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
         rounds: 2,
         ..Params::default()
     };
-    let never = std::sync::atomic::AtomicBool::new(false);
-    let out = crate::reconstruct_settling(
-        &samples,
-        &params,
-        None,
-        &mut |_| {},
-        &never,
-        crate::Ending::Guide,
-    )
-    .expect("guide");
+    // The stages of an adaptive guide pass.
+    let run = |seeds: Option<&TangentPoints>| {
+        crate::plan::with_plan(&samples, &params, |plan, mut journal| {
+            let (cloud, initial) =
+                crate::initial::initial_points(&plan, seeds, &mut journal, &mut |_| {})?;
+            let (cloud, _) =
+                crate::rounds::fine_tune(&plan, cloud, &mut journal, &mut |_| {}, &|| Ok(()))?;
+            let mesh = guide(&plan, &cloud, &mut journal, &mut |_| {})?;
+            let points = plan.unit.points_to_input(cloud);
+            Ok((mesh, points, initial, journal.timings))
+        })
+        .expect("guide")
+    };
+    let (mesh, points, _, timings) = run(None);
+    let out = crate::Reconstruction {
+        mesh,
+        points,
+        report: Report::default(),
+    };
     let topology = rfta_mesh::Topology::of(&out.mesh);
     assert!(topology.is_watertight());
     assert_eq!(rfta_mesh::face_components(&out.mesh).len(), 1);
@@ -311,19 +321,9 @@ fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
         let off = (*p - positions[o]).length() - samples.values()[o].abs();
         assert!(off.abs() < 1e-9, "{off}");
     }
-    let seeded = crate::reconstruct_settling(
-        &samples,
-        &params,
-        Some(&out.points),
-        &mut |_| {},
-        &never,
-        crate::Ending::Guide,
-    )
-    .expect("seeded");
-    assert_eq!(seeded.report.initial.seeded, out.points.len());
-    assert_eq!(out.report.repair, RepairReport::default());
-    assert_eq!(out.report.consistency, Consistency::default());
-    let steps: Vec<Step> = out.report.timings.iter().map(|&(s, _)| s).collect();
+    let (_, _, seeded, _) = run(Some(&out.points));
+    assert_eq!(seeded.seeded, out.points.len());
+    let steps: Vec<Step> = timings.iter().map(|&(s, _)| s).collect();
     assert!(steps.contains(&Step::FinalSolve), "{steps:?}");
     assert!(steps.contains(&Step::Components), "{steps:?}");
     for step in [Step::SpheresCleared, Step::Consistency] {
