@@ -1,13 +1,14 @@
 //! Project automation, run as `cargo xtask <command>`:
 //!
-//! - `ci`: everything CI checks, in order: fmt, clippy, tests, docs, the Python package's tests,
-//!   the Slurm job array, shaders, tidy, a quick eval and quick scenarios.
+//! - `ci`: everything CI checks, in order, with a summary of each step's time at the end: fmt,
+//!   clippy, tests, docs, the Python package's tests, the Slurm job array, the browser demo,
+//!   shaders, tidy, a quick eval, the 2D eval and quick scenarios.
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `slurm`: docs/batch.md's job-array script on a real one-node Slurm cluster (see [`slurm`]).
 //! - `tidy`: repository rules (see [`tidy`]).
-//! - `eval`: the paper's Table 2 on a folder of shapes (see [`eval`]).
-//! - `bench spsr | e2e`: our screened Poisson against PoissonRecon, and the whole reconstruction
-//!   against marching cubes and gpytoolbox, same inputs, same run (see [`mod@bench`]).
+//! - `web`: the browser demo as one page (see [`web`]).
+//! - `eval`, `bench`: the evaluation and the benchmarks, the tool crate `tools/rfta-eval`'s
+//!   (`cargo xtask eval --help`).
 
 #![expect(
     clippy::print_stdout,
@@ -15,9 +16,6 @@
     reason = "a command-line tool reports on its terminal"
 )]
 
-mod bench;
-mod eval;
-mod method;
 mod shaders;
 mod slurm;
 mod tidy;
@@ -25,6 +23,7 @@ mod web;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 
@@ -32,37 +31,20 @@ const HELP: &str = "\
 cargo xtask <command>
 
 commands:
-  ci        fmt --check, clippy -D warnings, tests, docs -D warnings, python (pip install crates/rfta-py into a
-            fresh venv, gpytoolbox's own tests against the drop-in, pytest, the adaptive example), slurm, shaders, tidy, eval --quick (mc, rfta), eval --2d --res 16,32, eval --scenario noise,clamp,scattered,swept,collision,params --quick
+  ci        everything CI checks, as .ci/run runs it: fmt --check, clippy -D warnings, tests,
+            docs -D warnings, python (the package in a fresh venv, gpytoolbox's own tests against
+            the drop-in, pytest, the adaptive example), slurm, web --check, shaders, tidy, a quick
+            eval, the 2D eval, quick scenarios; then each step's time, skipped steps named
   shaders   validate every shaders/*.wgsl with naga
-  web       [--out DIR] [--check]: the browser demo (rfta-web as WebAssembly, wasm32-wasip1) as one
-            page, <out>/index.html (default target/web); --check opens it in headless Chromium:
-            the genus-2 shape at 21^3 under 5 s with the native mesh (one thread), a screenshot
-  slurm     [--out DIR] docs/batch.md's Slurm job-array script, unchanged, on a one-node cluster started
-            here (slurm-wlm, munge; root): dev grids and a corrupt row, then a cancelled task resumed
-  tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in libraries
-  eval      [--inputs DIR | --meshes DIR] [--res 10,20,30] [--methods mc,rfta,rfta-default,rfta-paper]
-            [rfta-genus: the default preset told the ground truth's genus; not run unless named]
-            [--2d: the 2D pipeline and marching squares on inputs2d, --res 16,32,64]
-            [--vdb: each shape as an OpenVDB level set (voxel 2/N, --res 50,100), rfta against
-            OpenVDB's volumeToMesh on it (needs Debian's python3-openvdb)]
-            [--samples N] [--depth D] [--owner-band K] [--rounds R] [--seed S] [--initial gradient|raster]
-            [--keep-cavities] [--quick] [--out DIR]: Table 2 with marching
-            cubes measured in the same run, written to target/eval/<run>/ (results.csv, report.md,
-            chamfer.svg, contact_sheet.png and .html); --depth and --owner-band override the rfta methods'
-            Poisson depth and owner band (0: every sphere owns points)
-            --scenario noise,clamp,scattered,swept,collision,params [--levels L,..]: the paper's
-            Figures 23 (relative noise, levels 0.005,0.01,0.02,0.05), 24 (clamps at 4,2,1 spacings,
-            given and detected), 25 (swept volumes' pseudo-SDFs, sweep lengths 0,0.3,0.6), 22
-            (collision: segments of length 0.05,0.2,0.8, false negatives and positives), 11-13
-            (params = raster,batch,rounds swept on two shapes), and scattered samples (uniform and
-            near-surface, as many as the grid's), rfta against marching cubes on the changed and the
-            clean grid, into <out>/<scenario>/
-  bench     spsr [--quick] [--points N] [--depths 8,10] [--out DIR]: our sPSR and PoissonRecon
-            side by side (PoissonRecon needs `cargo bench-spsr`, i.e. --features poissonrecon)
-  bench     e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny] [--out DIR]:
-            rfta (default, fast), marching cubes and gpytoolbox on the same grids, wall/CPU/memory/
-            Chamfer and ratios (release build: `cargo bench-e2e`); --from-csv FILE prints the tables again
+  web       [--out DIR] [--check]: the browser demo as one page, <out>/index.html (default
+            <target>/web); --check opens it in headless Chromium
+  slurm     [--out DIR] docs/batch.md's Slurm job-array script on a one-node cluster started here
+  tidy      repository rules: crate docs and lints, dependency graph, one glam, no unwrap in
+            libraries, file and function lengths, public constants
+  eval      the evaluation (tools/rfta-eval): cargo xtask eval --help
+  bench     the benchmarks (tools/rfta-eval): cargo xtask bench --help
+
+<target> is $CARGO_TARGET_DIR when set, else target/.
 ";
 
 fn main() -> Result<()> {
@@ -72,10 +54,10 @@ fn main() -> Result<()> {
         Some("ci") => ci(&root),
         Some("shaders") => shaders::run(&root),
         Some("tidy") => tidy::run(&root),
-        Some("eval") => eval::run(&root, &args[1..]),
+        // The tool says what failed; its exit status is this command's.
+        Some("eval") => forward(rfta_eval(&root, &args[1..])),
+        Some("bench") => forward(rfta_eval(&root, &args)),
         Some("web") => web::run(&root, &args[1..]),
-        Some("bench") => bench::run(&root, &args[1..]),
-        Some("bench-child") => bench::child_main(&args[1..]),
         Some("slurm") => slurm::run(&root, &args[1..]),
         Some("help" | "--help" | "-h") | None => {
             print!("{HELP}");
@@ -85,12 +67,39 @@ fn main() -> Result<()> {
     }
 }
 
+/// Exits with the tool's own status when it failed (it said why).
+fn forward(result: Result<()>) -> Result<()> {
+    if result.is_err() {
+        std::process::exit(1);
+    }
+    result
+}
+
+/// The tool crate `rfta-eval` with `args`, built as this run of cargo builds.
+fn rfta_eval(root: &Path, args: &[String]) -> Result<()> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(cargo)
+        .args(["run", "-q", "-p", "rfta-eval", "--"])
+        .args(args)
+        .current_dir(root)
+        .status()
+        .context("cannot run cargo run -p rfta-eval")?;
+    if !status.success() {
+        bail!("rfta-eval {} failed ({status})", args.join(" "));
+    }
+    Ok(())
+}
+
+/// Where every generated output goes: `$CARGO_TARGET_DIR`, else the repository's `target/`.
+pub(crate) fn target_dir(root: &Path) -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from)
+}
+
 /// Builds the Python package from `crates/rfta-py` into a fresh virtual environment (pip and
 /// maturin from PyPI), runs gpytoolbox's own tests against the drop-in, then the package's tests,
 /// the CLI comparison against the debug `rfta` the test step built.
 fn python(root: &Path, cargo: &str) -> Result<()> {
-    let target =
-        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    let target = target_dir(root);
     let venv = target.join("py-venv");
     let _ = std::fs::remove_dir_all(&venv);
     let python = std::env::var("PYTHON").unwrap_or_else(|_| "python3".into());
@@ -112,6 +121,9 @@ fn python(root: &Path, cargo: &str) -> Result<()> {
         &[],
     )?;
     let bin = venv.join("bin");
+    println!(
+        "pip install crates/rfta-py[test]: maturin builds the Rust extension in release mode (a few minutes on 2 cores; quiet until done)"
+    );
     run(
         &bin.join("pip"),
         &["install", "-q", "crates/rfta-py[test]"],
@@ -146,7 +158,7 @@ fn python(root: &Path, cargo: &str) -> Result<()> {
         None if std::env::var_os("CI").is_some() => {
             bail!("../shared/peer-tests/gpytoolbox/run.sh not found; required under CI")
         }
-        None => println!("SKIPPED gpytoolbox's own tests: ../shared/peer-tests not found"),
+        None => skipped("gpytoolbox's own tests: ../shared/peer-tests not found".into()),
     }
     let rfta_bin = target.join("debug").join("rfta");
     run(
@@ -175,92 +187,145 @@ pub(crate) fn workspace_root() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("."))
 }
 
+/// Steps skipped in this run, each with why ([`skipped`]).
+static SKIPPED: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+/// Says, loudly, that `what` was skipped, and keeps it for `ci`'s summary.
+pub(crate) fn skipped(what: String) {
+    println!("SKIPPED {what}");
+    if let Ok(mut s) = SKIPPED.lock() {
+        s.push(what);
+    }
+}
+
 fn ci(root: &Path) -> Result<()> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    type Step = (
-        &'static str,
-        &'static [&'static str],
-        &'static [(&'static str, &'static str)],
-    );
-    let steps: [Step; 4] = [
-        ("fmt", &["fmt", "--all", "--check"], &[]),
-        (
-            "clippy",
-            &[
-                "clippy",
-                "--workspace",
-                "--all-targets",
-                "--",
-                "-D",
-                "warnings",
-            ],
-            &[],
-        ),
-        ("test", &["test", "--workspace"], &[]),
-        (
-            "doc",
-            &["doc", "--workspace", "--no-deps"],
-            &[("RUSTDOCFLAGS", "-D warnings")],
-        ),
-    ];
-    for (name, args, env) in steps {
-        println!("==> {name}: cargo {}", args.join(" "));
+    let cargo_step = |args: &[&str], env: &[(&str, &str)]| -> Result<()> {
         let status = Command::new(&cargo)
             .args(args)
             .envs(env.iter().copied())
             .current_dir(root)
             .status()
-            .with_context(|| format!("cannot run cargo for step '{name}'"))?;
+            .context("cannot run cargo")?;
         if !status.success() {
-            bail!("step '{name}' failed ({status})");
+            bail!("cargo {} failed ({status})", args.join(" "));
+        }
+        Ok(())
+    };
+    let eval_dir = |name: &str| {
+        target_dir(root)
+            .join("eval")
+            .join(name)
+            .display()
+            .to_string()
+    };
+    let eval = |args: &[&str]| -> Result<()> {
+        let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+        rfta_eval(root, &args)
+    };
+    type Step<'a> = (&'static str, Box<dyn Fn() -> Result<()> + 'a>);
+    let steps: Vec<Step<'_>> = vec![
+        (
+            "fmt",
+            Box::new(|| cargo_step(&["fmt", "--all", "--check"], &[])),
+        ),
+        (
+            "clippy",
+            Box::new(|| {
+                cargo_step(
+                    &[
+                        "clippy",
+                        "--workspace",
+                        "--all-targets",
+                        "--",
+                        "-D",
+                        "warnings",
+                    ],
+                    &[],
+                )
+            }),
+        ),
+        (
+            "test",
+            Box::new(|| cargo_step(&["test", "--workspace"], &[])),
+        ),
+        (
+            "doc",
+            Box::new(|| {
+                cargo_step(
+                    &["doc", "--workspace", "--no-deps"],
+                    &[("RUSTDOCFLAGS", "-D warnings")],
+                )
+            }),
+        ),
+        ("python", Box::new(|| python(root, &cargo))),
+        ("slurm", Box::new(|| slurm::run(root, &[]))),
+        (
+            "web --check",
+            Box::new(|| web::run(root, &["--check".to_string()])),
+        ),
+        ("shaders", Box::new(|| shaders::run(root))),
+        ("tidy", Box::new(|| tidy::run(root))),
+        (
+            "eval --quick (mc, rfta)",
+            // The Table 2 setting (20 rounds, 30 points per sphere) is for full runs.
+            Box::new(|| {
+                eval(&[
+                    "--quick",
+                    "--methods",
+                    "mc,rfta",
+                    "--out",
+                    &eval_dir("ci-quick"),
+                ])
+            }),
+        ),
+        (
+            "eval plane --res 16,32",
+            Box::new(|| eval(&["plane", "--res", "16,32", "--out", &eval_dir("ci-2d")])),
+        ),
+        (
+            "eval scenario noise,clamp,scattered,swept,collision,params --quick",
+            Box::new(|| {
+                eval(&[
+                    "scenario",
+                    "noise,clamp,scattered,swept,collision,params",
+                    "--quick",
+                    "--out",
+                    &eval_dir("ci-scenarios"),
+                ])
+            }),
+        ),
+    ];
+    let mut times = Vec::new();
+    for (name, step) in &steps {
+        println!("==> {name}");
+        let t = Instant::now();
+        let result = step();
+        times.push((*name, t.elapsed().as_secs_f64(), result.is_ok()));
+        if let Err(e) = result {
+            summary(&times);
+            return Err(e.context(format!("step '{name}' failed")));
         }
     }
-    println!(
-        "==> python: the rfta package built into a fresh venv, gpytoolbox's tests, then pytest"
-    );
-    python(root, &cargo)?;
-    println!("==> slurm: docs/batch.md's job array on a one-node Slurm cluster started here");
-    slurm::run(root, &[])?;
-    println!("==> web --check: the browser demo in headless Chromium");
-    web::run(root, &["--check".to_string()])?;
-    println!("==> shaders");
-    shaders::run(root)?;
-    println!("==> tidy");
-    tidy::run(root)?;
-    println!("==> eval --quick");
-    eval::run(
-        root,
-        &[
-            "--quick".to_string(),
-            // The Table 2 setting (20 rounds, 30 points per sphere) is for full runs.
-            "--methods".to_string(),
-            "mc,rfta".to_string(),
-            "--out".to_string(),
-            root.join("target/eval/ci-quick").display().to_string(),
-        ],
-    )?;
-    println!("==> eval --2d --res 16,32");
-    eval::run(
-        root,
-        &[
-            "--2d".to_string(),
-            "--res".to_string(),
-            "16,32".to_string(),
-            "--out".to_string(),
-            root.join("target/eval/ci-2d").display().to_string(),
-        ],
-    )?;
-    println!("==> eval --scenario noise,clamp,scattered,swept,collision,params --quick");
-    eval::run(
-        root,
-        &[
-            "--scenario".to_string(),
-            "noise,clamp,scattered,swept,collision,params".to_string(),
-            "--quick".to_string(),
-            "--out".to_string(),
-            root.join("target/eval/ci-scenarios").display().to_string(),
-        ],
-    )?;
+    summary(&times);
     println!("==> ci passed");
     Ok(())
+}
+
+/// Each step's time and outcome, then the steps skipped, loudly.
+fn summary(times: &[(&str, f64, bool)]) {
+    println!("\n==> summary");
+    for (name, seconds, ok) in times {
+        let outcome = if *ok { "ok" } else { "FAILED" };
+        println!("  {outcome:6} {seconds:7.1} s  {name}");
+    }
+    let total: f64 = times.iter().map(|t| t.1).sum();
+    println!("  total  {total:7.1} s");
+    let skipped = SKIPPED.lock().map(|s| s.clone()).unwrap_or_default();
+    for what in &skipped {
+        println!("  SKIPPED {what}");
+    }
+    if skipped.is_empty() {
+        println!("  nothing skipped");
+    }
 }

@@ -42,14 +42,13 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
                 missing.join(", ")
             );
         }
-        println!(
-            "SKIPPED the Slurm test: {} not installed",
+        crate::skipped(format!(
+            "the Slurm test: {} not installed",
             missing.join(", ")
-        );
+        ));
         return Ok(());
     }
-    let target =
-        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    let target = crate::target_dir(root);
     let out = match args {
         [flag, dir] if flag == "--out" => PathBuf::from(dir),
         [] => target.join("slurm"),

@@ -23,8 +23,7 @@ const BUDGET_MS: f64 = 5000.0;
 const TARGET: &str = "wasm32-wasip1";
 
 pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    let target_dir =
-        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    let target_dir = crate::target_dir(root);
     let mut out = target_dir.join("web");
     let mut check = false;
     let mut it = args.iter();

@@ -1,6 +1,6 @@
 //! The 2D stages on a circle's samples: the free arcs and initial points, and the screened
 //! Poisson solve at the depths the pipeline uses for 33^2 and 65^2 grids (8 and 9). The whole 2D
-//! pipeline against gpytoolbox's is `cargo xtask eval --2d` (CPU per shape in its report).
+//! pipeline against gpytoolbox's is `cargo xtask eval plane` (CPU per shape in its report).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use rfta_geom::glam::DVec2;

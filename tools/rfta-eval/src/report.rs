@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::Row;
+use crate::table::Row;
 
 /// Reference metrics by (shape, n, our method name).
 pub(crate) type Reference = HashMap<(String, usize, String), RefRow>;

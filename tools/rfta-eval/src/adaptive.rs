@@ -1,4 +1,4 @@
-//! `cargo xtask eval --scenario adaptive [--levels B,..]`: reconstruction from an SDF that can be
+//! `cargo xtask eval adaptive [--budgets B,..]`: reconstruction from an SDF that can be
 //! asked (`rfta::adaptive`), each dev shape's ground truth as the oracle (its exact signed
 //! distance), under budgets of evaluations (default 5k, 10k, 30k, 100k).
 //!
@@ -20,11 +20,48 @@ use rfta_geom::{Aabb, SdfSamples, TriMesh};
 use rfta_mesh::MeshIndex;
 use rfta_metrics::MeshSummary;
 
-use super::Shape;
-use super::report::{Line, line_chart};
+use crate::report::{Line, line_chart};
+use crate::shapes::{Shape, Source};
 
-/// The default budgets (evaluations).
-pub(crate) const BUDGETS: [f64; 4] = [5_000.0, 10_000.0, 30_000.0, 100_000.0];
+/// `cargo xtask eval adaptive`'s arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct Args {
+    /// Budgets of evaluations.
+    #[arg(
+        long,
+        alias = "levels",
+        value_delimiter = ',',
+        default_value = "5000,10000,30000,100000"
+    )]
+    budgets: Vec<usize>,
+    #[command(flatten)]
+    source: Source,
+    #[command(flatten)]
+    scoring: crate::table::Scoring,
+    #[command(flatten)]
+    tuning: crate::table::Tuning,
+    /// The run's folder (default: `<target>/eval/adaptive-<pid>`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<std::path::PathBuf>,
+}
+
+/// Runs the adaptive evaluation as `a` says.
+pub(crate) fn command(a: &Args) -> Result<()> {
+    let (shapes, _) = a.source.load()?;
+    let out = crate::out_dir(
+        a.out.as_deref(),
+        &format!("adaptive-{}", std::process::id()),
+    )?;
+    run(
+        &shapes,
+        &a.budgets,
+        a.scoring.samples,
+        &a.tuning.options(),
+        &out,
+    )?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
 
 /// The grid marching cubes is measured on for comparison: 129^3 points.
 const FINE_GRID: usize = 128;
@@ -60,7 +97,7 @@ fn grid_cells(budget: usize) -> usize {
         .max(2)
 }
 
-pub(crate) fn run(
+fn run(
     shapes: &[Shape],
     budgets: &[usize],
     samples: usize,
@@ -96,7 +133,7 @@ pub(crate) fn run(
             status: "ok".into(),
         };
         // Marching cubes on the fine grid, once per shape.
-        let (grid, values) = super::grid_for(shape, &gt, FINE_GRID)?;
+        let (grid, values) = crate::shapes::grid_for(shape, &gt, FINE_GRID)?;
         let t = Instant::now();
         let mesh = rfta_mc::marching_cubes(&grid, &values, 0.0);
         let mut row = base(0, "mc-129", grid.len());
@@ -144,7 +181,7 @@ pub(crate) fn run(
             rows.push(row);
             // The grid with about as many points.
             let n = grid_cells(budget);
-            let (grid, values) = super::grid_for(shape, &gt, n)?;
+            let (grid, values) = crate::shapes::grid_for(shape, &gt, n)?;
             let t = Instant::now();
             let mesh = rfta_mc::marching_cubes(&grid, &values, 0.0);
             let mut row = base(budget, "mc-grid", grid.len());
@@ -171,7 +208,7 @@ pub(crate) fn run(
     write_csv(&out.join("results.csv"), &rows)?;
     write_markdown(&out.join("report.md"), &rows, budgets)?;
     chart(&out.join("chamfer.svg"), &rows, budgets)?;
-    super::no_defects(
+    crate::table::no_defects(
         rows.iter()
             .map(|r| (format!("{} {} {}", r.shape, r.budget, r.method), &r.status)),
     )

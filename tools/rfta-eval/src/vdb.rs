@@ -1,4 +1,4 @@
-//! `cargo xtask eval --vdb`: rfta against OpenVDB's own mesher on OpenVDB level sets.
+//! `cargo xtask eval vdb`: rfta against OpenVDB's own mesher on OpenVDB level sets.
 //!
 //! Each dev shape becomes two narrow-band level sets (half width 3 voxels) at voxel sizes `2 / N`
 //! for each `--res N` (the spacing of an `N + 1`-point grid over `[-1, 1]`), both made and written
@@ -22,7 +22,7 @@ use rfta_geom::TriMesh;
 use rfta_mesh::MeshIndex;
 use rfta_metrics::MeshSummary;
 
-use super::Shape;
+use crate::shapes::{Shape, Source};
 
 const SCRIPT: &str = include_str!("openvdb.py");
 /// The two level sets of each shape and voxel size (see the module docs).
@@ -57,7 +57,7 @@ fn python() -> Result<PathBuf> {
         .is_ok_and(|o| o.status.success());
     if !ok {
         bail!(
-            "eval --vdb needs OpenVDB's Python module: {} cannot import pyopenvdb (Debian: apt-get \
+            "eval vdb needs OpenVDB's Python module: {} cannot import pyopenvdb (Debian: apt-get \
              install python3-openvdb; or set RFTA_OPENVDB_PYTHON)",
             p.display()
         );
@@ -65,7 +65,29 @@ fn python() -> Result<PathBuf> {
     Ok(p)
 }
 
-pub(crate) fn run(shapes: &[Shape], res: &[usize], samples: usize, out: &Path) -> Result<()> {
+/// `cargo xtask eval vdb`'s arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct Args {
+    #[command(flatten)]
+    source: Source,
+    /// Voxel sizes 2/N.
+    #[arg(long, value_delimiter = ',', default_value = "50,100")]
+    res: Vec<usize>,
+    #[command(flatten)]
+    scoring: crate::table::Scoring,
+    /// The run's folder (default: `<target>/eval/vdb-<pid>`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+/// Runs the OpenVDB comparison as `a` says.
+pub(crate) fn command(a: &Args) -> Result<()> {
+    let (shapes, _) = a.source.load()?;
+    let out = crate::out_dir(a.out.as_deref(), &format!("vdb-{}", std::process::id()))?;
+    run(&shapes, &a.res, a.scoring.samples, &out)
+}
+
+fn run(shapes: &[Shape], res: &[usize], samples: usize, out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let python = python()?;
     let script = out.join("openvdb.py");
@@ -184,12 +206,12 @@ fn compare(
         ..rfta::Params::default()
     };
     let samples_in = raw.validate(&vdb)?;
-    let cpu = crate::bench::process_usage().0;
+    let cpu = crate::usage::process_usage().0;
     let t = Instant::now();
     let result = rfta::reconstruct(&samples_in, &params)
         .with_context(|| format!("rfta on {}", vdb.display()))?;
     let rfta_seconds = t.elapsed().as_secs_f64();
-    let rfta_cpu = crate::bench::process_usage().0 - cpu;
+    let rfta_cpu = crate::usage::process_usage().0 - cpu;
     rfta_io::write_mesh(&out.join(format!("{stem}-rfta.obj")), &result.mesh)?;
     let vtm = rfta_io::read_mesh(&out.join(format!("{stem}-volumetomesh.obj")))?;
     let score = |mesh: &TriMesh| -> Result<f64> {

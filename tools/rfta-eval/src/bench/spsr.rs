@@ -43,33 +43,33 @@ struct RunResult {
     watertight: bool,
 }
 
-/// Entry: `bench spsr [--quick] [--points N] [--depths 8,10] [--out DIR]` (`args` after `spsr`).
-pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    let mut points = 100_000usize;
-    let mut depths = vec![8u32, 10];
-    let mut out = root.join("target/bench");
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--quick" => {
-                points = 10_000;
-                depths = vec![8];
-            }
-            "--points" => points = it.next().context("--points N")?.parse()?,
-            "--depths" => {
-                depths = it
-                    .next()
-                    .context("--depths 8,10")?
-                    .split(',')
-                    .map(|s| s.trim().parse())
-                    .collect::<std::result::Result<_, _>>()?
-            }
-            "--out" => out = PathBuf::from(it.next().context("--out DIR")?),
-            other => bail!("unknown option '{other}'"),
-        }
-    }
+/// `cargo xtask bench spsr`'s arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct Args {
+    /// 10,000 points, depth 8 only.
+    #[arg(long)]
+    quick: bool,
+    /// Points per cloud.
+    #[arg(long, default_value_t = 100_000)]
+    points: usize,
+    /// Octree depths.
+    #[arg(long, value_delimiter = ',', default_value = "8,10")]
+    depths: Vec<u32>,
+    /// Where the clouds, meshes and report go (default: `<target>/bench`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+/// Runs the benchmark as `a` says.
+pub(crate) fn run(a: &Args) -> Result<()> {
+    let (points, depths) = if a.quick {
+        (10_000, vec![8])
+    } else {
+        (a.points, a.depths.clone())
+    };
+    let out = a.out.clone().unwrap_or(crate::target_dir().join("bench"));
     std::fs::create_dir_all(&out)?;
-    let clouds = make_clouds(root, &out, points)?;
+    let clouds = make_clouds(&out, points)?;
     let exe = std::env::current_exe()?;
     let pinned = Command::new("taskset").arg("--version").output().is_ok();
     let mut table = String::new();
@@ -140,7 +140,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     Ok(())
 }
 
-fn make_clouds(root: &Path, out: &Path, n: usize) -> Result<Vec<Cloud>> {
+fn make_clouds(out: &Path, n: usize) -> Result<Vec<Cloud>> {
     let mut clouds = Vec::new();
     let (p, nn) = rfta_testkit_torus(n);
     let path = out.join(format!("torus_{n}.ply"));
@@ -150,7 +150,7 @@ fn make_clouds(root: &Path, out: &Path, n: usize) -> Result<Vec<Cloud>> {
         path,
         truth: Truth::Torus,
     });
-    let gt = root.join("../shared/data/inputs/bunny/gt.obj");
+    let gt = crate::data_dir().join("inputs/bunny/gt.obj");
     if gt.exists() {
         let mesh = rfta_io::read_mesh(&gt)?;
         let samples = rfta_mesh::sample_surface(&mesh, n, 7);
@@ -275,7 +275,7 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         other => bail!("unknown solver {other}"),
     };
     let wall = t.elapsed().as_secs_f64();
-    let (cpu, rss_mb) = super::process_usage();
+    let (cpu, rss_mb) = crate::usage::process_usage();
     rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
     println!("{{\"wall\": {wall}, \"cpu\": {cpu}, \"rss_mb\": {rss_mb}}}");
     Ok(())

@@ -75,78 +75,55 @@ struct Run {
     /// Wall times of every repeat, fastest first (this run's among them).
     walls: Vec<f64>,
     /// Per repeat (in `walls`' order), the share of the machine's CPU time the hypervisor gave
-    /// to other guests while it ran ([`super::steal_seconds`] over wall time and cores; NaN
+    /// to other guests while it ran ([`crate::usage::steal_seconds`] over wall time and cores; NaN
     /// where unknown).
     steals: Vec<f64>,
     /// Hash of the mesh file the run wrote.
     hash: u64,
 }
 
-struct Args {
+/// `cargo xtask bench e2e`'s arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct Args {
+    /// Print the tables again from a run's rows, without running.
+    #[arg(long, value_name = "FILE")]
     from_csv: Option<PathBuf>,
+    /// Two shapes at N = 20, no large grids.
+    #[arg(long)]
     quick: bool,
+    /// The Python with gpytoolbox (default: found or installed into the output's venv).
+    #[arg(long, value_name = "PATH")]
     python: Option<String>,
+    /// Dev-set resolutions N.
+    #[arg(long, value_delimiter = ',', default_value = "20,30")]
     res: Vec<usize>,
+    /// Large grids of one shape.
+    #[arg(long, value_delimiter = ',', default_value = "64,128")]
     large: Vec<usize>,
+    /// The shape of the large grids.
+    #[arg(long, default_value = "bunny")]
     shape: String,
-    out: PathBuf,
+    /// Where the rows and the report go (default: `<target>/bench`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
 }
 
-fn parse(root: &Path, args: &[String]) -> Result<Args> {
-    let mut a = Args {
-        from_csv: None,
-        quick: false,
-        python: None,
-        res: vec![20, 30],
-        large: vec![64, 128],
-        shape: "bunny".into(),
-        out: root.join("target/bench"),
-    };
-    let list = |v: &str| -> Result<Vec<usize>> {
-        v.split(',')
-            .filter(|t| !t.trim().is_empty())
-            .map(|t| {
-                t.trim()
-                    .parse::<usize>()
-                    .context("a list of numbers like 20,30")
-            })
-            .collect()
-    };
-    let mut it = args.iter();
-    while let Some(flag) = it.next() {
-        let mut value = || it.next().with_context(|| format!("{flag} needs a value"));
-        match flag.as_str() {
-            "--quick" => a.quick = true,
-            "--from-csv" => a.from_csv = Some(PathBuf::from(value()?)),
-            "--python" => a.python = Some(value()?.clone()),
-            "--res" => a.res = list(value()?)?,
-            "--large" => a.large = list(value()?)?,
-            "--shape" => a.shape = value()?.clone(),
-            "--out" => a.out = PathBuf::from(value()?),
-            other => bail!("unknown bench e2e option '{other}'"),
-        }
-    }
+/// Runs the benchmark as `a` says.
+pub(crate) fn run(a: &Args) -> Result<()> {
+    let mut a = a.clone();
     if a.quick {
         a.res = vec![20];
         a.large.clear();
     }
-    Ok(a)
-}
-
-/// Entry: `bench e2e ...` (`args` after `e2e`).
-pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    let a = parse(root, args)?;
+    let out = a.out.clone().unwrap_or(crate::target_dir().join("bench"));
     if let Some(csv) = &a.from_csv {
         let (rows, inputs) = read_csv(csv)?;
         let report = report(&rows, &inputs)?;
         println!("{report}");
         return Ok(());
     }
-    let data = std::env::var_os("RFTA_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("../shared/data"));
-    let inputs_dir = data.join("inputs");
-    std::fs::create_dir_all(&a.out)?;
+    let inputs_dir = crate::data_dir().join("inputs");
+    std::fs::create_dir_all(&out)?;
     let mut inputs = Vec::new();
     let mut shapes: Vec<PathBuf> = std::fs::read_dir(&inputs_dir)
         .with_context(|| format!("cannot read {}", inputs_dir.display()))?
@@ -175,7 +152,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         let gt = rfta_io::read_mesh(&large_gt)?;
         let index = MeshIndex::new(&gt)?;
         for &n in &a.large {
-            let path = a.out.join(format!("{}_n{n}.npy", a.shape));
+            let path = out.join(format!("{}_n{n}.npy", a.shape));
             if !path.is_file() {
                 println!("sampling {} at {}^3", a.shape, n + 1);
                 let grid = Grid::cube(n, -1.0, 1.0)?;
@@ -194,7 +171,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
             });
         }
     }
-    let python = find_python(a.python.as_deref(), &a.out)?;
+    let python = find_python(a.python.as_deref(), &out)?;
     match &python {
         Some(p) => println!("gpytoolbox: {}", p.display()),
         None => println!("gpytoolbox: no Python with gpytoolbox found (--python PATH); skipped"),
@@ -230,7 +207,7 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
         // Per method and thread count, every run (the repeats in order).
         let mut done: Vec<(&str, usize, Vec<Result<Run>>)> = Vec::new();
         for &(method, threads) in &these {
-            let mesh_path = a.out.join(format!(
+            let mesh_path = out.join(format!(
                 "{}_n{}_{method}_t{threads}.ply",
                 input.shape, input.n
             ));
@@ -350,9 +327,9 @@ pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
     }
     let inputs: Vec<(String, usize)> = inputs.iter().map(|i| (i.shape.clone(), i.n)).collect();
     let report = report(&rows, &inputs)?;
-    std::fs::write(a.out.join("e2e.csv"), csv)?;
-    std::fs::write(a.out.join("e2e.md"), &report)?;
-    println!("\n{report}\nwrote {}", a.out.join("e2e.md").display());
+    std::fs::write(out.join("e2e.csv"), csv)?;
+    std::fs::write(out.join("e2e.md"), &report)?;
+    println!("\n{report}\nwrote {}", out.join("e2e.md").display());
     Ok(())
 }
 
@@ -767,10 +744,10 @@ fn child(
 }
 
 /// The share of the machine's CPU time (all cores over `wall` seconds) that the hypervisor
-/// gave to other guests since `steal0` ([`super::steal_seconds`]).
+/// gave to other guests since `steal0` ([`crate::usage::steal_seconds`]).
 fn steal_share(steal0: f64, wall: f64) -> f64 {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-    (super::steal_seconds() - steal0) / (wall * cores)
+    (crate::usage::steal_seconds() - steal0) / (wall * cores)
 }
 
 /// The child: `bench-child e2e METHOD SDF MESH THREADS`; prints one JSON line.
@@ -783,11 +760,14 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
-        let (cpu0, steal0) = (super::process_usage().0, super::steal_seconds());
+        let (cpu0, steal0) = (
+            crate::usage::process_usage().0,
+            crate::usage::steal_seconds(),
+        );
         let t = Instant::now();
         let check = pool.install(ceiling_work);
         let wall = t.elapsed().as_secs_f64();
-        let (cpu, rss_mb) = super::process_usage();
+        let (cpu, rss_mb) = crate::usage::process_usage();
         let steal = steal_share(steal0, wall);
         println!(
             "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}, \"check\": {check}}}",
@@ -797,7 +777,10 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
     }
     let path = Path::new(sdf);
     let samples = rfta_io::read_sdf(path, None)?.validate(path)?;
-    let (cpu0, steal0) = (super::process_usage().0, super::steal_seconds());
+    let (cpu0, steal0) = (
+        crate::usage::process_usage().0,
+        crate::usage::steal_seconds(),
+    );
     let t = Instant::now();
     let mesh: TriMesh = match method.as_str() {
         "mc" => {
@@ -816,7 +799,7 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         other => bail!("unknown method {other}"),
     };
     let wall = t.elapsed().as_secs_f64();
-    let (cpu, rss_mb) = super::process_usage();
+    let (cpu, rss_mb) = crate::usage::process_usage();
     let steal = steal_share(steal0, wall);
     rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
     println!(

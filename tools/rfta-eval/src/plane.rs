@@ -1,12 +1,8 @@
-//! `cargo xtask eval --2d`: the 2D pipeline and marching squares on a folder of 2D inputs
+//! `cargo xtask eval plane`: the 2D pipeline and marching squares on a folder of 2D inputs
 //! (`NAME/gt2d.obj`, `NAME/sdf2d_n{N}.npy` on `linspace(-1, 1, N + 1)^2`), scored as the shared
 //! reference `gpytoolbox2d.csv` is (Chamfer over 10^5 length-uniform samples each way, Hausdorff
 //! over vertices, loops), with the reference's means beside ours.
 //!
-//! ```text
-//! cargo xtask eval --2d [--inputs DIR] [--res 16,32,64] [--out DIR]
-//! ```
-
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -61,7 +57,34 @@ struct Row2 {
     status: String,
 }
 
-pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) -> Result<()> {
+/// `cargo xtask eval plane`'s arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct Args {
+    /// 2D inputs (`NAME/gt2d.obj`, `NAME/sdf2d_n{N}.npy`; default: the shared data's `inputs2d`).
+    #[arg(long, value_name = "DIR")]
+    inputs: Option<std::path::PathBuf>,
+    /// Grid resolutions N.
+    #[arg(long, value_delimiter = ',', default_value = "16,32,64")]
+    res: Vec<usize>,
+    /// The run's folder (default: `<target>/eval/2d-<pid>`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<std::path::PathBuf>,
+}
+
+/// Runs the 2D evaluation as `a` says.
+pub(crate) fn command(a: &Args) -> Result<()> {
+    let data = crate::data_dir();
+    let inputs = a.inputs.clone().unwrap_or(data.join("inputs2d"));
+    let out = crate::out_dir(a.out.as_deref(), &format!("2d-{}", std::process::id()))?;
+    run(
+        &inputs,
+        &a.res,
+        &data.join("reference/gpytoolbox2d.csv"),
+        &out,
+    )
+}
+
+fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) -> Result<()> {
     let mut names: Vec<String> = std::fs::read_dir(inputs)
         .with_context(|| format!("cannot read {}", inputs.display()))?
         .filter_map(|e| e.ok())
@@ -84,20 +107,20 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
             let grid = *samples.as_grid().context("a 2D input is a grid")?;
             for m in [Method::Ms, Method::Rfta] {
                 let method = m.name();
-                let cpu = crate::bench::process_usage().0;
+                let cpu = crate::usage::process_usage().0;
                 let result: Result<Polylines> = match m {
                     Method::Ms => Ok(rfta_mc::marching_squares(&grid, samples.values(), 0.0)),
                     Method::Rfta => rfta::plane::reconstruct(&samples, &rfta::Params::default())
                         .map(|r| r.curve)
                         .map_err(Into::into),
                 };
-                let cpu_seconds = crate::bench::process_usage().0 - cpu;
+                let cpu_seconds = crate::usage::process_usage().0 - cpu;
                 // A curve with a defect is no result, whatever its accuracy.
                 let result =
                     result.map_err(|e| format!("error: {e}")).and_then(|curve| {
                         match curve.unreferenced_vertices() {
                             0 => Ok(curve),
-                            k => Err(super::defect(k)),
+                            k => Err(crate::table::defect(k)),
                         }
                     });
                 let row = match result {
@@ -160,7 +183,7 @@ pub(crate) fn run(inputs: &Path, res: &[usize], reference: &Path, out: &Path) ->
     let report = report(&rows, &reference_rows(reference, &names));
     std::fs::write(out.join("report.md"), &report)?;
     println!("{report}\nwrote {}", out.display());
-    super::no_defects(
+    crate::table::no_defects(
         rows.iter()
             .map(|r| (format!("{} n={} {}", r.shape, r.n, r.method), &r.status)),
     )

@@ -1,39 +1,5 @@
-//! `cargo xtask bench`: measurements that compare, each in its own child process so that its
-//! peak memory and CPU time are its own.
-//!
-//! - `bench spsr`: our screened Poisson against PoissonRecon on the same clouds ([`spsr`]).
-//! - `bench e2e`: the whole reconstruction against marching cubes and gpytoolbox's
-//!   `reach_for_the_arcs` on the same grids ([`e2e`]).
-
-pub(crate) mod e2e;
-pub(crate) mod spsr;
-
-use std::path::Path;
-
-use anyhow::{Result, bail};
-
-const USAGE: &str =
-    "usage: cargo xtask bench spsr [--quick] [--points N] [--depths 8,10] [--out DIR]
-       cargo xtask bench e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--out DIR]
-       cargo xtask bench e2e --from-csv FILE";
-
-/// Entry: `bench spsr ...` or `bench e2e ...`.
-pub(crate) fn run(root: &Path, args: &[String]) -> Result<()> {
-    match args.first().map(String::as_str) {
-        Some("spsr") => spsr::run(root, &args[1..]),
-        Some("e2e") => e2e::run(root, &args[1..]),
-        _ => bail!("{USAGE}"),
-    }
-}
-
-/// The child processes: `bench-child spsr ...` or `bench-child e2e ...`.
-pub(crate) fn child_main(args: &[String]) -> Result<()> {
-    match args.first().map(String::as_str) {
-        Some("spsr") => spsr::child_main(&args[1..]),
-        Some("e2e") => e2e::child_main(&args[1..]),
-        _ => bail!("bench-child spsr|e2e ..."),
-    }
-}
+//! What this process and the machine spent: CPU time, peak memory, and the time the hypervisor
+//! gave to other guests (read from `/proc`; NaN where there is none).
 
 /// CPU time the hypervisor gave to other guests since boot, summed over this machine's cores
 /// (`steal` of /proc/stat, in its 100 Hz ticks); NaN where there is no such file (not Linux).

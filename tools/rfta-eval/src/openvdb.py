@@ -1,4 +1,4 @@
-"""OpenVDB's side of `cargo xtask eval --vdb`, run with the system Python of Debian's
+"""OpenVDB's side of `cargo xtask eval vdb`, run with the system Python of Debian's
 python3-openvdb. For each (shape, voxel size) it is given, two narrow-band level sets (half width
 3 voxels), each written as a .vdb with OpenVDB's own mesh of it (volumeToMesh through
 `convertToPolygons`, isovalue 0, adaptivity 0: what Houdini and Blender users get; quads split
