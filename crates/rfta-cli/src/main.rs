@@ -9,6 +9,7 @@
 
 mod adaptive;
 mod batch;
+mod demo;
 mod info;
 mod paths;
 mod plane;
@@ -63,7 +64,7 @@ enum Command {
     Reconstruct(reconstruct::Args),
     /// Reconstruct a built-in genus-2 shape from a 21^3 grid and compare with marching cubes
     /// (`--2d`: a 2D shape with a hole against marching squares, drawn as SVG).
-    Demo(reconstruct::DemoArgs),
+    Demo(demo::DemoArgs),
     /// Screened Poisson surface reconstruction of oriented points (PoissonRecon's algorithm).
     Psr(psr::Args),
     /// Reconstruct every row of a manifest (or one shard of it), for job arrays: status CSV,
@@ -114,8 +115,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Sample(args) => sample::run(args, &ui),
         Command::Psr(args) => psr::run(args, &ui),
+        Command::Reconstruct(args) if args.input.is_none() => adaptive::from_mesh(&args, &ui),
         Command::Reconstruct(args) => reconstruct::run(args, &ui),
-        Command::Demo(args) => reconstruct::demo(args, &ui),
+        Command::Demo(args) => demo::demo(args, &ui),
         Command::Batch(args) => batch::run(args, threads, &ui),
         Command::View(args) => view::run(args, &ui),
         Command::Info { file, bounds, grid } => info::run(&file, bounds, grid.as_deref(), &ui),

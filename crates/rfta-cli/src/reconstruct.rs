@@ -1,10 +1,11 @@
-//! `rfta reconstruct` (a mesh from an SDF file) and `rfta demo` (a built-in shape with holes).
+//! `rfta reconstruct` from an SDF file, and what every reconstruction delivers: the mesh, the
+//! report, the page, the summary.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use rfta::geom::{Grid, SdfSamples, TriMesh, glam::DVec3};
+use rfta::geom::{SdfSamples, TriMesh};
 use rfta::{Params, Stage};
 
 use crate::ui::{Exit, Ui, parse_bounds};
@@ -37,7 +38,7 @@ pub(crate) struct Args {
     /// clamp) or scattered samples (.ply with an sdf property, .csv/.xyz rows x y z s).
     /// 2D samples are detected: .npy of shape (nx, ny) or (n, 3), .csv rows x y s, 16-bit .png, .exr images.
     #[arg(required_unless_present = "from_mesh")]
-    input: Option<PathBuf>,
+    pub(crate) input: Option<PathBuf>,
     /// Instead of an SDF file, ask a mesh's exact signed distance where the reconstruction needs
     /// it (adaptive sampling, at most --budget evaluations; for evaluation and demos).
     #[arg(long, value_name = "MESH", conflicts_with_all = ["input", "grid"])]
@@ -298,7 +299,7 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
 
 pub(crate) fn run(args: Args, ui: &Ui) -> Result<()> {
     let Some(input) = args.input.clone() else {
-        return crate::adaptive::from_mesh(&args, ui);
+        bail!("an SDF file (or --from-mesh) is needed");
     };
     if args.budget.is_some() {
         bail!("--budget is the most evaluations of --from-mesh's SDF; an SDF file has its samples");
@@ -468,85 +469,6 @@ pub(crate) fn write(path: &Path, mesh: &TriMesh, ui: &Ui) -> Result<()> {
     rfta_io::write_mesh(path, mesh)?;
     ui.say(format!("wrote {}", path.display()));
     Ok(())
-}
-
-/// `rfta demo`'s shape: two overlapping tori, genus 2 ([`rfta::geom::Analytic::TwoTori`]).
-fn two_tori(p: DVec3) -> f64 {
-    rfta::geom::Analytic::TwoTori.sdf(p)
-}
-
-#[derive(Debug, clap::Args)]
-pub(crate) struct DemoArgs {
-    /// Output mesh.
-    #[arg(short, long, default_value = "demo.obj")]
-    output: PathBuf,
-    /// Grid cells per axis over [-1, 1]^3 (2D: default 32).
-    #[arg(long)]
-    res: Option<usize>,
-    /// The 2D demo: a shape with a hole against marching squares, one SVG (default demo2d.svg).
-    #[arg(long = "2d")]
-    two_d: bool,
-    /// Ask the shape's exact SDF where the reconstruction needs it (adaptive sampling) instead of
-    /// sampling a grid.
-    #[arg(long, conflicts_with_all = ["res", "two_d"])]
-    adaptive: bool,
-    /// With --adaptive: the most evaluations of the SDF (default 10000).
-    #[arg(long, value_name = "N", requires = "adaptive")]
-    budget: Option<usize>,
-    #[command(flatten)]
-    tuning: Tuning,
-}
-
-pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
-    let output = if args.two_d && args.output == Path::new("demo.obj") {
-        PathBuf::from("demo2d.svg")
-    } else {
-        args.output.clone()
-    };
-    crate::paths::Files::new()
-        .write("the output (-o)", &output)
-        .check()?;
-    if args.two_d {
-        crate::ui::check_output_2d(&output)?;
-    } else {
-        crate::ui::check_output(&output)?;
-    }
-    if args.adaptive {
-        let budget = args.budget.unwrap_or(10_000);
-        return crate::adaptive::demo(&output, budget, &args.tuning.params()?, ui);
-    }
-    let res = args.res.unwrap_or(if args.two_d { 32 } else { 20 });
-    if res < 2 {
-        bail!("--res must be at least 2");
-    }
-    if args.two_d {
-        return crate::plane::demo(&output, res, &args.tuning.params()?, ui);
-    }
-    let grid = Grid::cube(res, -1.0, 1.0)?;
-    let values: Vec<f64> = (0..grid.len())
-        .map(|i| two_tori(grid.position(i)))
-        .collect();
-    let samples = SdfSamples::grid(grid, values.clone())?;
-    ui.say(format!(
-        "demo: two overlapping tori (genus 2) sampled on a {0}^3 grid ({1} samples)",
-        res + 1,
-        grid.len()
-    ));
-    let params = args.tuning.params()?;
-    let t = Instant::now();
-    let out = run_pipeline(&samples, &params, ui)?;
-    describe(&out, ui, t.elapsed().as_secs_f64());
-    let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
-    let err = |m: &TriMesh| crate::ui::mean_and_max(m.vertices.iter().map(|&v| two_tori(v).abs()));
-    let (rm, rx) = err(&out.mesh);
-    let (mm, mx) = err(&mc);
-    let genus = rfta_mesh::Topology::of(&out.mesh).genus();
-    ui.say(format!(
-        "distance of vertices to the true surface, mean / max: rfta {rm:.4} / {rx:.4}, marching cubes {mm:.4} / {mx:.4} (grid spacing {:.4}); genus {}",
-        2.0 / res as f64,
-        genus.map_or("n/a (several components)".into(), |g| g.to_string())
-    ));
-    write(&args.output, &out.mesh, ui)
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 use rayon::prelude::*;
 use rfta_geom::{Aabb, glam::DVec3};
 
-use crate::bvh::Node;
+use crate::node::Node;
 
 /// Centroid bins along the axis a range is split across.
 const BINS: usize = 16;

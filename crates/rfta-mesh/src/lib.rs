@@ -42,6 +42,8 @@ mod build;
 mod bvh;
 mod components;
 mod loops;
+mod moments;
+mod node;
 mod sample;
 mod scaled;
 mod surgery;

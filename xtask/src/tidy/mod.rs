@@ -7,13 +7,20 @@
 //!    `tidy:deps` block), and every crate is listed there;
 //! 5. exactly one version of glam is locked (obvhs' range and ours must meet);
 //! 6. library code (`crates/*/src`, outside tests, testkit and the CLI) has no `.unwrap()`,
-//!    `.expect(`, `println!` or `eprintln!`.
+//!    `.expect(`, `println!` or `eprintln!`;
+//! 7. no file of `crates/*/src` is over 600 lines and no function there over 100 (test modules
+//!    aside), no file of `tools/` over 600 lines, and `xtask/src` stays under 2,000 lines;
+//! 8. at most 10 `pub const` across the library crates (tuning constants are crate-private or
+//!    fields of the parameters they belong to);
+//! 9. no two sibling files of a crate import from each other (a circle a newcomer walks).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use anyhow::{Context, Result, bail};
+
+mod sizes;
 
 pub(crate) fn run(root: &Path) -> Result<()> {
     let mut problems = Vec::new();
@@ -82,6 +89,7 @@ pub(crate) fn run(root: &Path) -> Result<()> {
             }
         }
     }
+    sizes::check(root, &rust_files(root), &mut problems)?;
     let lock = std::fs::read_to_string(root.join("Cargo.lock")).context("Cargo.lock")?;
     let n_glam = lock.matches("\nname = \"glam\"\n").count();
     if n_glam != 1 {
@@ -180,7 +188,12 @@ fn allowed_deps(root: &Path) -> Result<BTreeMap<String, BTreeSet<String>>> {
 
 fn rust_files(root: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
-    let mut stack = vec![root.join("crates"), root.join("tests"), root.join("xtask")];
+    let mut stack = vec![
+        root.join("crates"),
+        root.join("tests"),
+        root.join("tools"),
+        root.join("xtask"),
+    ];
     while let Some(dir) = stack.pop() {
         let Ok(rd) = std::fs::read_dir(&dir) else {
             continue;
