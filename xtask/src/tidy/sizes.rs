@@ -40,6 +40,15 @@ pub(super) fn check(
                 text.lines().count()
             ));
         }
+        if let Some((krate, module)) = rel.split_once("/src/")
+            && (rel.starts_with("crates/") || rel.starts_with("tools/"))
+            && !module.ends_with("tests.rs")
+        {
+            crates
+                .entry(krate.to_string())
+                .or_default()
+                .push((module.to_string(), code_of(&text).to_string()));
+        }
         let library = rel.starts_with("crates/") && rel.contains("/src/");
         if !library || rel.ends_with("/tests.rs") {
             continue;
@@ -56,15 +65,6 @@ pub(super) fn check(
         }
         if !rel.starts_with("crates/rfta-cli/") {
             consts.extend(pub_consts(code).map(|c| format!("{rel}: {c}")));
-        }
-        if let Some((krate, module)) = rel
-            .strip_prefix("crates/")
-            .and_then(|r| r.split_once("/src/"))
-        {
-            crates
-                .entry(krate.to_string())
-                .or_default()
-                .push((module.to_string(), code.to_string()));
         }
     }
     if xtask >= XTASK_LINES {
