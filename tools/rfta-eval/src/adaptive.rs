@@ -20,7 +20,7 @@ use rfta_geom::{Aabb, SdfSamples, TriMesh};
 use rfta_mesh::MeshIndex;
 use rfta_metrics::MeshSummary;
 
-use crate::report::{Line, line_chart};
+use crate::chart::{Line, line_chart};
 use crate::shapes::{Shape, Source};
 
 /// `cargo xtask eval adaptive`'s arguments.

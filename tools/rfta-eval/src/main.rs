@@ -24,6 +24,7 @@
 
 mod adaptive;
 mod bench;
+mod chart;
 mod method;
 mod plane;
 mod render;

@@ -9,8 +9,9 @@ use anyhow::{Context, Result, bail};
 use rfta_geom::{Grid, SdfSamples, TriMesh, glam::DVec3};
 use rfta_mesh::MeshIndex;
 
+use crate::report::{self, Row};
 use crate::shapes::{Shape, Source, grid_for};
-use crate::{render, report};
+use crate::{chart, render};
 
 /// The methods `--methods` takes; all but the last run without it. `rfta-genus` is the default
 /// preset told the ground truth's genus (`rfta::Params::genus`), as a user who knows it would.
@@ -94,30 +95,6 @@ impl Tuning {
         put("keep_cavities", self.keep_cavities.then_some(true.into()));
         m
     }
-}
-
-/// One (shape, resolution, method) result.
-#[derive(Debug, Clone)]
-pub(crate) struct Row {
-    pub(crate) shape: String,
-    pub(crate) n: usize,
-    pub(crate) method: String,
-    pub(crate) seconds: f64,
-    /// CPU seconds of this process (all threads) while the method ran.
-    pub(crate) cpu_seconds: f64,
-    pub(crate) chamfer: f64,
-    pub(crate) hausdorff: f64,
-    pub(crate) e_sdf: f64,
-    pub(crate) watertight: bool,
-    pub(crate) genus: Option<i64>,
-    pub(crate) gt_genus: Option<i64>,
-    pub(crate) components: usize,
-    /// Components facing inward (`rfta_mesh::cavities`), and the ground truth's.
-    pub(crate) cavities: usize,
-    pub(crate) gt_cavities: usize,
-    /// Agreement with every input sample (`rfta::consistency`); `None` when the method failed.
-    pub(crate) consistency: Option<rfta::Consistency>,
-    pub(crate) status: String,
 }
 
 /// Runs Table 2 as `a` says.
@@ -263,7 +240,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
         &a.methods,
         chamfer_samples,
     )?;
-    report::write_svg(
+    chart::write_svg(
         &out.join("chamfer.svg"),
         &rows,
         &reference,

@@ -79,9 +79,7 @@ pub(super) fn check(
     }
     for (krate, modules) in &crates {
         for (a, b) in circles(modules) {
-            problems.push(format!(
-                "crates/{krate}/src: {a} and {b} import from each other"
-            ));
+            problems.push(format!("{krate}/src: {a} and {b} import from each other"));
         }
     }
     Ok(())
@@ -174,24 +172,38 @@ fn circles(modules: &[(String, String)]) -> Vec<(String, String)> {
         let mut found = BTreeSet::new();
         for (prefix, base) in [("crate::", String::new()), ("super::", parent.to_string())] {
             for (at, _) in code.match_indices(prefix) {
-                let rest: String = code[at + prefix.len()..]
-                    .chars()
-                    .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
-                    .collect();
-                let mut target = base.clone();
-                for part in rest.split("::").filter(|p| !p.is_empty()) {
-                    let next = if target.is_empty() {
-                        part.to_string()
-                    } else {
-                        format!("{target}::{part}")
-                    };
-                    if !known.contains(next.as_str()) {
-                        break;
+                let after = &code[at + prefix.len()..];
+                // `crate::{a, b::c}` names each of its paths; `crate::a::b` one.
+                let paths: Vec<&str> = match after.strip_prefix('{') {
+                    Some(group) => group
+                        .split('}')
+                        .next()
+                        .unwrap_or("")
+                        .split(',')
+                        .map(str::trim)
+                        .collect(),
+                    None => vec![after],
+                };
+                for path in paths {
+                    let rest: String = path
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+                        .collect();
+                    let mut target = base.clone();
+                    for part in rest.split("::").filter(|p| !p.is_empty()) {
+                        let next = if target.is_empty() {
+                            part.to_string()
+                        } else {
+                            format!("{target}::{part}")
+                        };
+                        if !known.contains(next.as_str()) {
+                            break;
+                        }
+                        target = next;
                     }
-                    target = next;
-                }
-                if !target.is_empty() && target != *me {
-                    found.insert(target);
+                    if !target.is_empty() && target != *me {
+                        found.insert(target);
+                    }
                 }
             }
         }
@@ -234,7 +246,7 @@ mod tests {
         let m = |f: &str, c: &str| (f.to_string(), c.to_string());
         let modules = [
             m("lib.rs", "mod a; mod b; mod c; use crate::a::x;"),
-            m("a.rs", "use crate::b::y;"),
+            m("a.rs", "use crate::{b::y, c};"),
             m("b.rs", "use crate::a::x;"),
             m("c/mod.rs", "use crate::c::d::z;"),
             m("c/d.rs", "use super::w;"),

@@ -34,7 +34,7 @@ mod collision;
 mod kind;
 mod report;
 
-use crate::report::{Line, line_chart};
+use crate::chart::{Line, line_chart};
 use crate::shapes::{Shape, Source};
 use collision::{Collisions, Segment, projectiles};
 pub(crate) use kind::Scenario;

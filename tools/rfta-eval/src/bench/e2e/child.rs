@@ -1,0 +1,160 @@
+//! `bench e2e`'s child processes: each method on one grid in a process of its own (rfta and
+//! marching cubes as `bench-child e2e`, gpytoolbox in Python), its time, CPU and peak memory.
+
+use super::*;
+
+/// A Python that imports gpytoolbox: `--python`, else `python3` if it has it.
+pub(super) fn find_python(given: Option<&str>, out: &Path) -> Result<Option<PathBuf>> {
+    let candidate = given.unwrap_or("python3");
+    let ok = Command::new(candidate)
+        .args(["-c", "import gpytoolbox, numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        if given.is_some() {
+            bail!("{candidate} cannot import gpytoolbox and numpy");
+        }
+        return Ok(None);
+    }
+    std::fs::write(out.join("gpytoolbox_child.py"), PYTHON_CHILD)?;
+    Ok(Some(PathBuf::from(candidate)))
+}
+
+/// gpytoolbox's `reach_for_the_arcs` with its defaults on a grid; one JSON line out.
+pub(super) const PYTHON_CHILD: &str = r#"import json, resource, sys, time
+import numpy as np
+import gpytoolbox as gpy
+sdf, out = sys.argv[1], sys.argv[2]
+lo = [float(v) for v in sys.argv[3:6]]
+hi = [float(v) for v in sys.argv[6:9]]
+S = np.load(sdf)
+axes = [np.linspace(lo[a], hi[a], S.shape[a]) for a in range(3)]
+X, Y, Z = np.meshgrid(*axes, indexing="ij")
+U = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+t, c = time.perf_counter(), time.process_time()
+V, F = gpy.reach_for_the_arcs(U, S.ravel())
+wall, cpu = time.perf_counter() - t, time.process_time() - c
+gpy.write_mesh(out, V, F)
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+print(json.dumps({"wall": wall, "cpu": cpu, "rss_mb": rss}))
+"#;
+
+/// Runs one method in a child process; `(wall, cpu, peak MB)`.
+pub(super) fn child(
+    exe: &Path,
+    python: Option<&Path>,
+    method: &str,
+    threads: usize,
+    input: &Input,
+    mesh: &Path,
+) -> Result<(f64, f64, f64, f64)> {
+    let mut cmd = if method == "gpytoolbox" {
+        let python = python.context("no Python with gpytoolbox")?;
+        let raw = rfta_io::read_sdf(&input.path, None)?;
+        let Layout::Grid(g) = raw.layout else {
+            bail!("{} is not a grid", input.path.display());
+        };
+        let b = g.bounds();
+        let mut c = Command::new(python);
+        let script = mesh
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join("gpytoolbox_child.py");
+        c.arg(script)
+            .arg(&input.path)
+            .arg(mesh.with_extension("obj"));
+        for v in b.min.to_array().into_iter().chain(b.max.to_array()) {
+            c.arg(v.to_string());
+        }
+        c
+    } else {
+        let mut c = Command::new(exe);
+        c.args(["bench-child", "e2e", method])
+            .arg(&input.path)
+            .arg(mesh)
+            .arg(threads.to_string());
+        c
+    };
+    cmd.env("RAYON_NUM_THREADS", threads.to_string())
+        .env("OMP_NUM_THREADS", threads.to_string());
+    let o = cmd.output().context("start the benchmark child")?;
+    if !o.status.success() {
+        bail!("{}", String::from_utf8_lossy(&o.stderr).trim());
+    }
+    if method == "gpytoolbox" {
+        // Scored as PLY like the others.
+        let m = rfta_io::read_mesh(&mesh.with_extension("obj"))?;
+        rfta_io::write_mesh(mesh, &m)?;
+    }
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = stdout.lines().last().unwrap_or_default();
+    let v: serde_json::Value = serde_json::from_str(line.trim()).context("child output")?;
+    let get = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    Ok((get("wall"), get("cpu"), get("rss_mb"), get("steal")))
+}
+
+/// The share of the machine's CPU time (all cores over `wall` seconds) that the hypervisor
+/// gave to other guests since `steal0` ([`crate::usage::steal_seconds`]).
+pub(super) fn steal_share(steal0: f64, wall: f64) -> f64 {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    (crate::usage::steal_seconds() - steal0) / (wall * cores)
+}
+
+/// The child: `bench-child e2e METHOD SDF MESH THREADS`; prints one JSON line.
+pub(crate) fn child_main(args: &[String]) -> Result<()> {
+    let [method, sdf, mesh_out, threads] = args else {
+        bail!("bench-child e2e METHOD SDF MESH THREADS");
+    };
+    let threads: usize = threads.parse()?;
+    if method == "ceiling" {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let (cpu0, steal0) = (
+            crate::usage::process_usage().0,
+            crate::usage::steal_seconds(),
+        );
+        let t = Instant::now();
+        let check = pool.install(ceiling_work);
+        let wall = t.elapsed().as_secs_f64();
+        let (cpu, rss_mb) = crate::usage::process_usage();
+        let steal = steal_share(steal0, wall);
+        println!(
+            "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}, \"check\": {check}}}",
+            cpu - cpu0
+        );
+        return Ok(());
+    }
+    let path = Path::new(sdf);
+    let samples = rfta_io::read_sdf(path, None)?.validate(path)?;
+    let (cpu0, steal0) = (
+        crate::usage::process_usage().0,
+        crate::usage::steal_seconds(),
+    );
+    let t = Instant::now();
+    let mesh: TriMesh = match method.as_str() {
+        "mc" => {
+            let grid = samples.as_grid().context("marching cubes needs a grid")?;
+            rfta_mc::marching_cubes(grid, samples.values(), 0.0)
+        }
+        m if m.starts_with("rfta") => {
+            let base =
+                crate::method::rfta_params(m).with_context(|| format!("unknown method {m}"))?;
+            let params = rfta::Params {
+                threads: Some(threads),
+                ..base
+            };
+            rfta::reconstruct(&samples, &params)?.mesh
+        }
+        other => bail!("unknown method {other}"),
+    };
+    let wall = t.elapsed().as_secs_f64();
+    let (cpu, rss_mb) = crate::usage::process_usage();
+    let steal = steal_share(steal0, wall);
+    rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
+    println!(
+        "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}}}",
+        cpu - cpu0
+    );
+    Ok(())
+}

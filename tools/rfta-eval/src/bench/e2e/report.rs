@@ -1,0 +1,394 @@
+//! `bench e2e`'s tables: the rows read back from a run's CSV, the report in Markdown, and the
+//! scaling from one core to two.
+
+use super::*;
+
+/// The rows and inputs of an `e2e.csv` this command wrote.
+#[allow(clippy::type_complexity)]
+pub(super) fn read_csv(
+    path: &Path,
+) -> Result<(
+    Vec<(String, usize, String, usize, Result<Run>)>,
+    Vec<(String, usize)>,
+)> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let mut rows = Vec::new();
+    let mut inputs: Vec<(String, usize)> = Vec::new();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < 11 {
+            bail!("{}: short row '{line}'", path.display());
+        }
+        let num = |i: usize| f[i].parse::<f64>().unwrap_or(f64::NAN);
+        let (shape, n) = (f[0].to_string(), f[1].parse::<usize>()?);
+        if !inputs.contains(&(shape.clone(), n)) {
+            inputs.push((shape.clone(), n));
+        }
+        let run = if f[10] == "ok" {
+            Ok(Run {
+                wall: num(4),
+                cpu: num(5),
+                rss_mb: num(6),
+                chamfer: num(7),
+                faces: f[8].parse().unwrap_or(0),
+                watertight: f[9] == "true",
+                walls: f
+                    .get(11)
+                    .map(|w| w.split(';').filter_map(|v| v.parse().ok()).collect())
+                    .unwrap_or_else(|| vec![num(4)]),
+                steals: f
+                    .get(12)
+                    .map(|w| w.split(';').filter_map(|v| v.parse().ok()).collect())
+                    .unwrap_or_default(),
+                hash: 0,
+            })
+        } else {
+            Err(anyhow::anyhow!("{}", f[10]))
+        };
+        rows.push((shape, n, f[2].to_string(), f[3].parse()?, run));
+    }
+    Ok((rows, inputs))
+}
+
+pub(super) fn name_of(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The tables: per N and method, means over the shapes that every method finished, and the
+/// ratios; then every row.
+pub(super) fn report(
+    rows: &[(String, usize, String, usize, Result<Run>)],
+    inputs: &[(String, usize)],
+) -> Result<String> {
+    let mut s = String::new();
+    writeln!(
+        s,
+        "| N | shapes | method | threads | wall s | CPU s | peak MB | Chamfer | gpytoolbox CPU / this | this wall / mc wall |"
+    )?;
+    writeln!(s, "|{}", "---|".repeat(10))?;
+    let mut ns: Vec<usize> = inputs.iter().map(|i| i.1).collect();
+    ns.dedup();
+    for &n in &ns {
+        let find = |shape: &str, m: &str, t: usize| {
+            rows.iter().find_map(|(sh, nn, mm, tt, r)| {
+                (sh == shape && *nn == n && mm == m && *tt == t)
+                    .then_some(r.as_ref().ok())
+                    .flatten()
+            })
+        };
+        let shapes: Vec<&str> = inputs
+            .iter()
+            .filter(|i| i.1 == n)
+            .map(|i| i.0.as_str())
+            .collect();
+        for &(m, t) in &REPORT_ORDER {
+            // Shapes this method and marching cubes both finished (gpytoolbox too, when it ran).
+            let ok: Vec<&str> = shapes
+                .iter()
+                .copied()
+                .filter(|sh| find(sh, m, t).is_some() && find(sh, "mc", 1).is_some())
+                .collect();
+            if ok.is_empty() {
+                continue;
+            }
+            let mean = |f: &dyn Fn(&Run) -> f64, m: &str, t: usize| {
+                ok.iter()
+                    .filter_map(|sh| find(sh, m, t))
+                    .map(f)
+                    .sum::<f64>()
+                    / ok.len() as f64
+            };
+            let cpu = mean(&|r| r.cpu, m, t);
+            let gpy: Vec<f64> = ok
+                .iter()
+                .filter_map(|sh| find(sh, "gpytoolbox", 1).map(|r| r.cpu))
+                .collect();
+            let vs_gpy = if gpy.len() == ok.len() && m != "gpytoolbox" && m != "mc" && cpu > 0.0 {
+                format!("{:.1}", gpy.iter().sum::<f64>() / ok.len() as f64 / cpu)
+            } else {
+                "-".into()
+            };
+            let mc = mean(&|r| r.wall, "mc", 1);
+            let vs_mc = if m != "mc" && mc > 0.0 {
+                format!("{:.0}", mean(&|r| r.wall, m, t) / mc)
+            } else {
+                "-".into()
+            };
+            writeln!(
+                s,
+                "| {n} | {} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {vs_gpy} | {vs_mc} |",
+                ok.len(),
+                mean(&|r| r.wall, m, t),
+                cpu,
+                ok.iter()
+                    .filter_map(|sh| find(sh, m, t))
+                    .map(|r| r.rss_mb)
+                    .fold(0.0, f64::max),
+                mean(&|r| r.chamfer, m, t),
+            )?;
+        }
+    }
+    writeln!(
+        s,
+        "\nPeak MB is the largest over the shapes; CPU seconds are user + system of the child during the call (10 ms resolution: marching cubes shows 0). With more than one run (the default preset on 1 and 2 threads, {SCALING_REPEATS} runs each, alternating), a row is the run of median wall time.\n"
+    )?;
+    for &n in &ns {
+        let Some(rfta) = Scaling::of(rows, n, "rfta-default") else {
+            continue;
+        };
+        writeln!(
+            s,
+            "From 1 to 2 threads at N = {n} ({} shapes, {} runs each per thread count): median wall time per shape {:.2} to {:.2} s, **{:.2}x**; fastest runs {:.2} to {:.2} s, {:.2}x.\n",
+            rfta.shapes,
+            rfta.runs,
+            rfta.median.0,
+            rfta.median.1,
+            rfta.median.0 / rfta.median.1,
+            rfta.fastest.0,
+            rfta.fastest.1,
+            rfta.fastest.0 / rfta.fastest.1,
+        )?;
+        let total = 2 * rfta.shapes * rfta.runs;
+        match rfta.quiet {
+            Some((q, k)) => writeln!(
+                s,
+                "Over the quiet runs only ({k} of {total}: the hypervisor took at most {:.0}% of the machine's CPU time during the run, by `steal` in /proc/stat): median wall time per shape {:.2} to {:.2} s, **{:.2}x**.\n",
+                100.0 * QUIET_STEAL,
+                q.0,
+                q.1,
+                q.0 / q.1,
+            )?,
+            None => writeln!(
+                s,
+                "Too few quiet runs for a speed-up over them (some shape has no run on a thread count during which the hypervisor took at most {:.0}% of the CPU time, or this machine has no `steal` counter).\n",
+                100.0 * QUIET_STEAL,
+            )?,
+        }
+        if let Some(c) = Scaling::of(rows, n, "ceiling") {
+            let (ceiling, ours) = (c.median.0 / c.median.1, rfta.median.0 / rfta.median.1);
+            writeln!(
+                s,
+                "The machine's ceiling in the same loop (a perfectly parallel workload, run between them the same number of times): median {:.2} to {:.2} s, **{ceiling:.2}x**; fastest {:.2}x. The pipeline's speed-up is {:.0}% of the ceiling's (median runs).\n",
+                c.median.0,
+                c.median.1,
+                c.fastest.0 / c.fastest.1,
+                100.0 * (ours - 1.0) / (ceiling - 1.0).max(f64::EPSILON),
+            )?;
+        }
+    }
+    writeln!(
+        s,
+        "| shape | N | method | threads | wall s | CPU s | peak MB | Chamfer | faces | watertight |"
+    )?;
+    writeln!(s, "|{}", "---|".repeat(10))?;
+    for (shape, n, m, t, r) in rows {
+        match r {
+            // The ceiling's workload writes no mesh.
+            Ok(r) if m == "ceiling" => writeln!(
+                s,
+                "| {shape} | {n} | {m} | {t} | {:.2} | {:.2} | {:.0} | - | - | - |",
+                r.wall, r.cpu, r.rss_mb
+            )?,
+            Ok(r) => writeln!(
+                s,
+                "| {shape} | {n} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {} | {} |",
+                r.wall, r.cpu, r.rss_mb, r.chamfer, r.faces, r.watertight
+            )?,
+            Err(e) => writeln!(
+                s,
+                "| {shape} | {n} | {m} | {t} | failed: {} |||||",
+                format!("{e:#}").replace(['|', '\n'], " ")
+            )?,
+        }
+    }
+    Ok(s)
+}
+
+/// The 1- and 2-thread runs of one method at one resolution, over the shapes that have both:
+/// mean wall time per shape of the median and of the fastest runs, `(1 thread, 2 threads)`.
+pub(super) struct Scaling {
+    shapes: usize,
+    runs: usize,
+    median: (f64, f64),
+    fastest: (f64, f64),
+    /// The median over the quiet runs only (steal up to [`QUIET_STEAL`]), and how many runs
+    /// that is; `None` where some shape has no quiet run on a thread count.
+    quiet: Option<((f64, f64), usize)>,
+}
+
+impl Scaling {
+    fn of(
+        rows: &[(String, usize, String, usize, Result<Run>)],
+        n: usize,
+        method: &str,
+    ) -> Option<Self> {
+        let walls = |t: usize| -> Vec<(&str, &Run)> {
+            rows.iter()
+                .filter(|(_, nn, m, tt, _)| *nn == n && m == method && *tt == t)
+                .filter_map(|(sh, _, _, _, r)| r.as_ref().ok().map(|r| (sh.as_str(), r)))
+                .collect()
+        };
+        let (one, two) = (walls(1), walls(2));
+        let runs: Vec<(&Run, &Run)> = one
+            .iter()
+            .filter_map(|(sh, r1)| {
+                two.iter()
+                    .find(|(s2, _)| s2 == sh)
+                    .map(|(_, r2)| (*r1, *r2))
+            })
+            .collect();
+        let pairs: Vec<(&[f64], &[f64])> = runs
+            .iter()
+            .map(|(a, b)| (&a.walls[..], &b.walls[..]))
+            .collect();
+        // Wall times of the quiet runs (sorted, as `walls` is).
+        let quiet_walls = |r: &Run| -> Vec<f64> {
+            r.walls
+                .iter()
+                .zip(&r.steals)
+                .filter(|(_, s)| **s <= QUIET_STEAL)
+                .map(|(w, _)| *w)
+                .collect()
+        };
+        let quiet: Vec<(Vec<f64>, Vec<f64>)> = runs
+            .iter()
+            .map(|(a, b)| (quiet_walls(a), quiet_walls(b)))
+            .collect();
+        let quiet = quiet
+            .iter()
+            .all(|(a, b)| !a.is_empty() && !b.is_empty())
+            .then(|| {
+                let k = quiet.len() as f64;
+                let med = |w: &[f64]| w[(w.len() - 1) / 2];
+                (
+                    (
+                        quiet.iter().map(|q| med(&q.0)).sum::<f64>() / k,
+                        quiet.iter().map(|q| med(&q.1)).sum::<f64>() / k,
+                    ),
+                    quiet.iter().map(|q| q.0.len() + q.1.len()).sum(),
+                )
+            });
+        let k = pairs.len() as f64;
+        let mean = |pick: &dyn Fn(&[f64]) -> f64| -> (f64, f64) {
+            (
+                pairs.iter().map(|p| pick(p.0)).sum::<f64>() / k,
+                pairs.iter().map(|p| pick(p.1)).sum::<f64>() / k,
+            )
+        };
+        Some(Self {
+            shapes: pairs.len(),
+            runs: pairs.first()?.0.len(),
+            median: mean(&|w| w[(w.len() - 1) / 2]),
+            fastest: mean(&|w| w[0]),
+            quiet,
+        })
+    }
+}
+
+/// The ceiling's workload: 64 equal tasks, each 2,000 passes of arithmetic over a private
+/// 32 KiB buffer (in a core's own cache), handed out one at a time, so nothing is serial,
+/// shared or unbalanced: what 2 threads gain over 1 on it is what this machine gives at that
+/// moment (about 0.55 s on one thread of the project's VM). Returns a checksum, so that the work
+/// is not optimized away.
+pub(super) fn ceiling_work() -> f64 {
+    use rayon::prelude::*;
+    (0..64u32)
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|task| {
+            let mut x: Vec<f64> = (0..4096).map(|i| f64::from(i + task) * 1e-3).collect();
+            for pass in 0..2000 {
+                let a = 1.0 - 1e-7 * f64::from(pass);
+                for v in &mut x {
+                    *v = (*v * a + 1e-9).sqrt() * 1.0001;
+                }
+            }
+            x.iter().sum::<f64>()
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(walls: &[f64], steals: &[f64]) -> Result<Run> {
+        Ok(Run {
+            wall: walls[(walls.len() - 1) / 2],
+            cpu: 0.0,
+            rss_mb: 0.0,
+            chamfer: f64::NAN,
+            faces: 0,
+            watertight: true,
+            walls: walls.to_vec(),
+            steals: steals.to_vec(),
+            hash: 0,
+        })
+    }
+
+    #[test]
+    fn the_quiet_speed_up_leaves_out_runs_the_hypervisor_slowed() {
+        let rows = vec![
+            (
+                "a".into(),
+                20,
+                "rfta".into(),
+                1,
+                run(&[1.0, 2.0, 3.0], &[0.0, 0.5, 0.01]),
+            ),
+            (
+                "a".into(),
+                20,
+                "rfta".into(),
+                2,
+                run(&[0.5, 1.0, 2.0], &[0.3, 0.0, 0.0]),
+            ),
+        ];
+        let s = Scaling::of(&rows, 20, "rfta").expect("one shape");
+        // Quiet: 1.0 and 3.0 on one thread (median 1.0), 1.0 and 2.0 on two (median 1.0).
+        assert_eq!(s.quiet, Some(((1.0, 1.0), 4)));
+        assert_eq!(s.median, (2.0, 1.0));
+        let rows = vec![
+            ("a".into(), 20, "rfta".into(), 1, run(&[1.0], &[0.5])),
+            ("a".into(), 20, "rfta".into(), 2, run(&[0.5], &[0.0])),
+        ];
+        let s = Scaling::of(&rows, 20, "rfta").expect("one shape");
+        assert_eq!(s.quiet, None);
+    }
+
+    #[test]
+    fn the_speed_up_pairs_shapes_and_takes_medians_and_fastest_runs() {
+        let row = |shape: &str, method: &str, threads, walls: &[f64]| {
+            (
+                shape.to_string(),
+                20,
+                method.to_string(),
+                threads,
+                run(walls, &[0.0; 3]),
+            )
+        };
+        let rows = vec![
+            row("a", "rfta", 1, &[1.0, 2.0, 3.0]),
+            row("a", "rfta", 2, &[0.5, 1.0, 2.0]),
+            row("b", "rfta", 1, &[3.0, 4.0, 9.0]),
+            row("b", "rfta", 2, &[2.0, 2.0, 2.0]),
+            // No 2-thread run: left out of the pairs.
+            row("c", "rfta", 1, &[10.0, 10.0, 10.0]),
+            row("a", "ceiling", 1, &[0.6, 0.6, 0.6]),
+            row("a", "ceiling", 2, &[0.3, 0.3, 0.4]),
+        ];
+        let s = Scaling::of(&rows, 20, "rfta").expect("two shapes have both");
+        assert_eq!((s.shapes, s.runs), (2, 3));
+        // Medians (2 + 4) / 2 and (1 + 2) / 2; fastest (1 + 3) / 2 and (0.5 + 2) / 2.
+        assert_eq!(s.median, (3.0, 1.5));
+        assert_eq!(s.fastest, (2.0, 1.25));
+        let c = Scaling::of(&rows, 20, "ceiling").expect("one shape");
+        assert_eq!(c.median, (0.6, 0.3));
+        assert!(Scaling::of(&rows, 30, "rfta").is_none());
+        assert!(Scaling::of(&rows, 20, "mc").is_none());
+        // Every run quiet: the quiet medians are the medians.
+        assert_eq!(s.quiet, Some(((3.0, 1.5), 12)));
+    }
+}
