@@ -30,7 +30,10 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 use rfta_geom::{Grid, TriMesh, glam::DVec3};
 
+mod squares;
 pub mod table;
+
+pub use squares::marching_squares;
 
 /// Cube corner `c` (0..8) as an offset: bit 0 is x, bit 1 is y, bit 2 is z.
 fn corner_offset(c: usize) -> [usize; 3] {
@@ -108,29 +111,4 @@ fn edge_vertex(grid: &Grid, values: &[f64], iso: f64, edge: u64) -> DVec3 {
         0.5
     };
     grid.position(point).lerp(grid.position(b), t)
-}
-
-/// Marching squares, the 2D baseline: the curve `value = iso` of the bilinear interpolant of
-/// `values` on `grid`, closed loops (unless they reach the border) with the inside (`value < iso`)
-/// on the left of each edge. The contouring is `rfta_geom::plane::contour`, which the 2D screened
-/// Poisson extraction uses too.
-///
-/// ```
-/// use rfta_geom::glam::DVec2;
-/// use rfta_geom::plane::Grid2;
-///
-/// let grid = Grid2::from_bounds([21, 21], DVec2::splat(-1.0), DVec2::splat(1.0)).expect("valid test input");
-/// let values: Vec<f64> = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
-/// let curve = rfta_mc::marching_squares(&grid, &values, 0.0);
-/// assert_eq!(curve.loops(), 1);
-/// ```
-///
-/// # Panics
-/// If `values.len() != grid.len()`, as [`marching_cubes`].
-pub fn marching_squares(
-    grid: &rfta_geom::plane::Grid2,
-    values: &[f64],
-    iso: f64,
-) -> rfta_geom::plane::Polylines {
-    rfta_geom::plane::contour(grid, values, iso)
 }

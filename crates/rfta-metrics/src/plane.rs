@@ -4,7 +4,8 @@
 
 use rayon::prelude::*;
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{PolylineIndex, Polylines};
+use rfta_geom::plane::Polylines;
+use rfta_mesh::PolylineIndex;
 
 /// `n` points spread uniformly by length over the edges: the midpoints of `n` equal pieces of the
 /// total length (deterministic; no seed needed).

@@ -12,7 +12,7 @@ use std::f64::consts::{PI, TAU};
 
 use rayon::prelude::*;
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{Closest, PolylineIndex};
+use rfta_mesh::{Closest, PolylineIndex};
 
 /// A circle: a sample's position and `|s|`.
 #[derive(Debug, Clone, Copy, PartialEq)]

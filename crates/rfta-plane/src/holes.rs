@@ -10,7 +10,8 @@
 //! the samples' and stays.
 
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{Grid2, PolylineIndex, Polylines};
+use rfta_geom::plane::{Grid2, Polylines};
+use rfta_mesh::PolylineIndex;
 
 use crate::arcs::Circle;
 

@@ -21,7 +21,8 @@
 
 use rayon::prelude::*;
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{Grid2, Polylines, contour};
+use rfta_geom::plane::{Grid2, Polylines};
+use rfta_mc::marching_squares;
 
 /// Settings of a 2D solve.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,7 +111,7 @@ pub struct Solution {
 impl Solution {
     /// The reconstructed curve: closed loops with the inside on their left.
     pub fn curve(&self) -> Polylines {
-        contour(&self.grid, &self.values, self.iso)
+        marching_squares(&self.grid, &self.values, self.iso)
     }
 
     /// `chi(p) - iso`: negative inside.

@@ -19,7 +19,8 @@
 use std::time::Instant;
 
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{PolylineIndex, Polylines, Samples2};
+use rfta_geom::plane::{Polylines, Samples2};
+use rfta_mesh::PolylineIndex;
 use rfta_plane::arcs::{Circle, TuneParams};
 use rfta_plane::spsr::{self, Domain, SpsrParams};
 

@@ -1,8 +1,9 @@
 //! The 2D pipeline on analytic shapes with known answers.
 
 use rfta::geom::glam::DVec2;
-use rfta::geom::plane::{Grid2, PolylineIndex, Polylines, Samples2};
+use rfta::geom::plane::{Grid2, Polylines, Samples2};
 use rfta::{Params, plane};
+use rfta_mesh::PolylineIndex;
 
 fn grid_samples(n: usize, sdf: impl Fn(DVec2) -> f64) -> Samples2 {
     let grid =
