@@ -457,6 +457,20 @@ pub fn fine_tune(
     TangentPoints::from_per_sphere(per, owners.into_iter())
 }
 
+/// The index in `range` of the point of `points` nearest `q` (the lowest on a tie; the range's
+/// start when it is empty).
+fn nearest(points: &[DVec3], range: std::ops::Range<usize>, q: DVec3) -> usize {
+    let start = range.start;
+    range
+        .min_by(|&a, &b| {
+            (points[a] - q)
+                .length_squared()
+                .total_cmp(&(points[b] - q).length_squared())
+                .then(a.cmp(&b))
+        })
+        .unwrap_or(start)
+}
+
 /// What one fine-tuning round reads, shared by every sphere's rule.
 #[derive(Clone, Copy)]
 struct Round<'a> {
@@ -527,15 +541,7 @@ impl Round<'_> {
         if k == 0 {
             emitted.push(Transported::Unchecked(qi));
         } else {
-            let closest = owned
-                .clone()
-                .min_by(|&a, &b| {
-                    (cloud.points[a] - qi)
-                        .length_squared()
-                        .total_cmp(&(cloud.points[b] - qi).length_squared())
-                        .then(a.cmp(&b))
-                })
-                .unwrap_or(owned.start);
+            let closest = nearest(&cloud.points, owned.clone(), qi);
             emitted.push(transport(
                 spheres,
                 tree,

@@ -77,7 +77,7 @@ impl Topology {
         // Union-find over corners (face, slot) to count fans per vertex, and over faces for
         // components.
         let mut corners = UnionFind::new(n_faces * 3);
-        let mut comps = UnionFind::new(n_faces);
+        let comps = UnionFind::new(n_faces);
         let slot = |face: usize, v: u32| -> usize {
             let f = mesh.faces[face];
             face * 3 + f.iter().position(|&x| x == v).unwrap_or(0)
@@ -100,21 +100,7 @@ impl Topology {
                 _ => nonmanifold_edges += 1,
             }
         }
-        // Faces sharing a vertex are in one component.
-        let mut first_face_of_vertex = vec![u32::MAX; n_all];
-        for (fi, f) in mesh.faces.iter().enumerate() {
-            for &v in f {
-                let Some(slot) = first_face_of_vertex.get_mut(v as usize) else {
-                    continue;
-                };
-                if *slot == u32::MAX {
-                    *slot = fi as u32;
-                } else {
-                    comps.union(*slot as usize, fi);
-                }
-            }
-        }
-        let components = (0..n_faces).filter(|&f| comps.find(f) == f).count();
+        let components = components(mesh, comps);
         // A vertex is non-manifold if its corners form more than one fan.
         let mut fans_per_vertex = vec![0u32; n_all];
         for (fi, f) in mesh.faces.iter().enumerate() {
@@ -173,4 +159,22 @@ impl Topology {
         let twice = 2 * self.components as i64 - self.euler_characteristic();
         (twice % 2 == 0).then_some(twice / 2)
     }
+}
+
+/// The components of `mesh`: `comps` (over faces) joined where faces share a vertex.
+fn components(mesh: &TriMesh, mut comps: UnionFind) -> usize {
+    let mut first_face_of_vertex = vec![u32::MAX; mesh.n_vertices()];
+    for (fi, f) in mesh.faces.iter().enumerate() {
+        for &v in f {
+            let Some(slot) = first_face_of_vertex.get_mut(v as usize) else {
+                continue;
+            };
+            if *slot == u32::MAX {
+                *slot = fi as u32;
+            } else {
+                comps.union(*slot as usize, fi);
+            }
+        }
+    }
+    (0..mesh.n_faces()).filter(|&f| comps.find(f) == f).count()
 }

@@ -11,9 +11,7 @@
 //! Built by maturin (`pip install crates/rfta-py`); `cargo build -p rfta-py` builds the shared
 //! library without linking libpython.
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Mutex, mpsc};
-use std::time::Duration;
+use std::sync::Mutex;
 
 use numpy::{
     PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -22,10 +20,15 @@ use numpy::{
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use rfta::Stage;
 use rfta_geom::glam::{DVec2, DVec3};
 use rfta_geom::plane::{Grid2, Samples2};
-use rfta_geom::{Grid, OrientedPoints, SdfSamples, TriMesh};
+use rfta_geom::{OrientedPoints, TriMesh};
+
+mod convert;
+mod detach;
+
+use convert::{faces, grid_of, in_grid_order, mesh_arrays, points, rows, samples_of};
+use detach::detached;
 
 pyo3::create_exception!(
     _rfta,
@@ -33,67 +36,6 @@ pyo3::create_exception!(
     PyValueError,
     "The samples describe no surface (every value of one sign, and their spheres leave no room)."
 );
-
-/// `(n, 3)` rows as points.
-fn points(a: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<DVec3>> {
-    let shape = a.shape();
-    if shape[1] != 3 {
-        return Err(PyValueError::new_err(format!(
-            "{what} must have shape (n, 3), not {shape:?}"
-        )));
-    }
-    let flat = a.as_slice()?;
-    Ok(flat
-        .chunks_exact(3)
-        .map(|c| DVec3::new(c[0], c[1], c[2]))
-        .collect())
-}
-
-/// `(m, 3)` integer rows as faces of a mesh with `n_vertices` vertices.
-fn faces(a: &PyReadonlyArray2<'_, i64>, n_vertices: usize) -> PyResult<Vec<[u32; 3]>> {
-    let shape = a.shape();
-    if shape[1] != 3 {
-        return Err(PyValueError::new_err(format!(
-            "F must have shape (m, 3), not {shape:?}"
-        )));
-    }
-    a.as_slice()?
-        .chunks_exact(3)
-        .map(|c| {
-            let mut f = [0u32; 3];
-            for (k, &v) in c.iter().enumerate() {
-                f[k] = u32::try_from(v)
-                    .ok()
-                    .filter(|&i| (i as usize) < n_vertices)
-                    .ok_or_else(|| {
-                        PyValueError::new_err(format!(
-                            "F holds index {v}, outside the {n_vertices} vertices"
-                        ))
-                    })?;
-            }
-            Ok(f)
-        })
-        .collect()
-}
-
-/// A mesh as numpy arrays `V (n, 3) float64`, `F (m, 3) int64`.
-fn mesh_arrays<'py>(py: Python<'py>, mesh: &TriMesh) -> PyResult<Bound<'py, PyTuple>> {
-    let v = rows(py, &mesh.vertices)?;
-    let f: Vec<i64> = mesh.faces.iter().flat_map(|f| f.map(i64::from)).collect();
-    let f = PyArray1::from_vec(py, f).reshape([mesh.faces.len(), 3])?;
-    PyTuple::new(py, [v.into_any(), f.into_any()])
-}
-
-/// Points as an `(n, 3)` float64 array.
-fn rows<'py>(py: Python<'py>, p: &[DVec3]) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-    let flat: Vec<f64> = p.iter().flat_map(|v| v.to_array()).collect();
-    PyArray1::from_vec(py, flat).reshape([p.len(), 3])
-}
-
-fn grid_of(dims: [usize; 3], lo: [f64; 3], hi: [f64; 3]) -> PyResult<Grid> {
-    Grid::from_bounds(dims, DVec3::from_array(lo), DVec3::from_array(hi))
-        .map_err(|e| PyValueError::new_err(format!("bounds: {e}")))
-}
 
 /// The library's error as the Python exception a caller can act on.
 fn error(e: rfta::Error) -> PyErr {
@@ -150,75 +92,6 @@ fn params(preset: &str, options: Option<&Bound<'_, PyDict>>) -> PyResult<rfta::P
         given.insert(key, json);
     }
     p.with_options(given).map_err(error)
-}
-
-/// A stage as the progress callback sees it: `(stage, done, of)`.
-fn stage_tuple(stage: Stage) -> (String, usize, usize) {
-    match stage {
-        Stage::Initial => ("initial".into(), 0, 1),
-        Stage::FineTune { round, of } => (format!("round {round}/{of}"), round - 1, of),
-        Stage::Final => ("final".into(), 0, 1),
-        Stage::Progress { done, of } => ("progress".into(), done, of),
-        _ => ("stage".into(), 0, 1),
-    }
-}
-
-/// Runs `work` on a worker thread without the GIL, while this thread forwards its stages to
-/// `progress`, and on Ctrl-C (or an exception raised by `progress`) sets the cancel flag, waits
-/// for the worker to stop and raises.
-fn detached<T: Send>(
-    py: Python<'_>,
-    progress: Option<&Bound<'_, PyAny>>,
-    work: impl FnOnce(&mut (dyn FnMut(Stage) + Send), &AtomicBool) -> rfta::Result<T> + Send,
-) -> PyResult<T> {
-    let cancel = AtomicBool::new(false);
-    let (send, receive) = mpsc::channel::<Stage>();
-    // Waited on without the GIL, so shared with the closure that runs detached.
-    let receive = Mutex::new(receive);
-    let mut raised: Option<PyErr> = None;
-    let outcome = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| {
-            let mut forward = move |stage: Stage| {
-                let _ = send.send(stage);
-            };
-            work(&mut forward, &cancel)
-        });
-        loop {
-            let next = py.detach(|| match receive.lock() {
-                Ok(r) => r.recv_timeout(Duration::from_millis(100)),
-                Err(_) => Err(mpsc::RecvTimeoutError::Disconnected),
-            });
-            match next {
-                Ok(stage) => {
-                    if let (Some(cb), None) = (progress, &raised)
-                        && let Err(e) = cb.call1(stage_tuple(stage))
-                    {
-                        cancel.store(true, Ordering::Relaxed);
-                        raised = Some(e);
-                    }
-                }
-                Err(mpsc::RecvTimeoutError::Timeout) => {
-                    if raised.is_none()
-                        && let Err(e) = py.check_signals()
-                    {
-                        cancel.store(true, Ordering::Relaxed);
-                        raised = Some(e);
-                    }
-                }
-                Err(mpsc::RecvTimeoutError::Disconnected) => break,
-            }
-        }
-        py.detach(|| worker.join())
-    });
-    if let Some(e) = raised {
-        return Err(e);
-    }
-    match outcome {
-        Ok(result) => result.map_err(error),
-        Err(_) => Err(PyRuntimeError::new_err(
-            "rfta panicked (a bug: please report it with the input)",
-        )),
-    }
 }
 
 /// Reconstructs from samples: `values` (n,) at `positions` (n, 3), or on the grid `dims` over
@@ -398,51 +271,6 @@ fn reconstruct_2d<'py>(
         py,
         [v.into_any(), e.into_any(), pts.into_any(), nrm.into_any()],
     )
-}
-
-/// `values` given at the positions `Grid::fit` or `Grid2::fit` placed at `index`, in the grid's
-/// order.
-fn in_grid_order(index: &[usize], values: &[f64]) -> Vec<f64> {
-    let mut on_grid = vec![0.0; values.len()];
-    for (&i, &v) in index.iter().zip(values) {
-        on_grid[i] = v;
-    }
-    on_grid
-}
-
-/// The samples: `values` at `positions`, a grid when they are one (in any order), or on the
-/// grid `dims` over `lo`..`hi` (C order).
-fn samples_of(
-    values: PyReadonlyArray1<'_, f64>,
-    positions: Option<PyReadonlyArray2<'_, f64>>,
-    dims: Option<[usize; 3]>,
-    lo: Option<[f64; 3]>,
-    hi: Option<[f64; 3]>,
-) -> PyResult<SdfSamples> {
-    let values = values.as_slice()?.to_vec();
-    match (positions, dims, lo, hi) {
-        (Some(p), None, None, None) => {
-            let p = points(&p, "U")?;
-            if p.len() != values.len() {
-                return Err(PyValueError::new_err(format!(
-                    "U has {} points but S has {} values",
-                    p.len(),
-                    values.len()
-                )));
-            }
-            match Grid::fit(&p) {
-                Some((grid, index)) => SdfSamples::grid(grid, in_grid_order(&index, &values)),
-                None => SdfSamples::scattered(p, values),
-            }
-        }
-        (None, Some(dims), Some(lo), Some(hi)) => SdfSamples::grid(grid_of(dims, lo, hi)?, values),
-        _ => {
-            return Err(PyValueError::new_err(
-                "give positions, or dims with lo and hi",
-            ));
-        }
-    }
-    .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// The HTML page of a reconstruction (`rfta_view`): the mesh `(V, triangles)` against its

@@ -96,32 +96,9 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
     let mut incident = Incidence::of(mesh);
     for round in 0..CLEAR_ROUNDS {
         let part = in_frame(mesh, spheres);
-        let entry = |i: u32| {
-            let s = spheres.spheres[i as usize];
-            let lo = s.radius - depth;
-            (lo > 0.0).then_some((s.center, lo))
-        };
-        // The first round asks every sphere, the later ones only those entered before, around
-        // where they were entered: a vertex moves by at most CLEAR_REACH.
-        let found: Vec<(u32, rfta_mesh::ClosestPoint)> = if round == 0 {
-            let Ok(index) = rfta_mesh::MeshIndex::new(&part) else {
-                break;
-            };
-            (0..spheres.spheres.len() as u32)
-                .into_par_iter()
-                .filter(|&i| spheres.spheres[i as usize].radius < below)
-                .filter_map(|i| {
-                    let (c, lo) = entry(i)?;
-                    Some((i, index.closest_point_within(c, lo * lo)?))
-                })
-                .collect()
-        } else {
-            last.par_iter()
-                .filter_map(|&(i, ref seed)| {
-                    let (c, lo) = entry(i)?;
-                    Some((i, nearest_around(&part, &incident, seed.face, c, lo)?))
-                })
-                .collect()
+        let previous = (round > 0).then_some(last.as_slice());
+        let Some(found) = entered(&part, &incident, spheres, previous, below, depth) else {
+            break;
         };
         if found.is_empty() {
             break;
@@ -144,23 +121,7 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
                 let s = spheres.spheres[i as usize];
                 let holds =
                     |v: u32| (part.vertices[v as usize] - s.center).length() < s.radius - depth;
-                let mut cap: Vec<u32> = part.faces[c.face as usize]
-                    .into_iter()
-                    .filter(|&v| holds(v))
-                    .collect();
-                let mut next = 0;
-                while next < cap.len() {
-                    let v = cap[next];
-                    next += 1;
-                    for &f in incident.faces(v) {
-                        for w in part.faces[f as usize] {
-                            if !cap.contains(&w) && holds(w) {
-                                cap.push(w);
-                            }
-                        }
-                    }
-                }
-                cap
+                cap(&part, &incident, c.face, holds)
             })
             .collect();
         inside.sort_unstable();
@@ -203,6 +164,68 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
         last = found;
     }
     added
+}
+
+/// The spheres smaller than `below` that `part` enters by more than `depth`, each with the point
+/// of `part` nearest its centre: every sphere the first round (`previous` none), the later ones
+/// only those entered before, around where they were entered (a vertex moves by at most
+/// `CLEAR_REACH`). `None` when `part` cannot be indexed.
+fn entered(
+    part: &TriMesh,
+    incident: &Incidence,
+    spheres: &Spheres<'_>,
+    previous: Option<&[(u32, rfta_mesh::ClosestPoint)]>,
+    below: f64,
+    depth: f64,
+) -> Option<Vec<(u32, rfta_mesh::ClosestPoint)>> {
+    use rayon::prelude::*;
+    let entry = |i: u32| {
+        let s = spheres.spheres[i as usize];
+        let lo = s.radius - depth;
+        (lo > 0.0).then_some((s.center, lo))
+    };
+    Some(match previous {
+        None => {
+            let index = rfta_mesh::MeshIndex::new(part).ok()?;
+            (0..spheres.spheres.len() as u32)
+                .into_par_iter()
+                .filter(|&i| spheres.spheres[i as usize].radius < below)
+                .filter_map(|i| {
+                    let (c, lo) = entry(i)?;
+                    Some((i, index.closest_point_within(c, lo * lo)?))
+                })
+                .collect()
+        }
+        Some(last) => last
+            .par_iter()
+            .filter_map(|&(i, ref seed)| {
+                let (c, lo) = entry(i)?;
+                Some((i, nearest_around(part, incident, seed.face, c, lo)?))
+            })
+            .collect(),
+    })
+}
+
+/// The vertices `holds` takes that connect to face `face`'s through such vertices: a sphere's
+/// cap, grown from the face nearest its centre.
+fn cap(part: &TriMesh, incident: &Incidence, face: u32, holds: impl Fn(u32) -> bool) -> Vec<u32> {
+    let mut cap: Vec<u32> = part.faces[face as usize]
+        .into_iter()
+        .filter(|&v| holds(v))
+        .collect();
+    let mut next = 0;
+    while next < cap.len() {
+        let v = cap[next];
+        next += 1;
+        for &f in incident.faces(v) {
+            for w in part.faces[f as usize] {
+                if !cap.contains(&w) && holds(w) {
+                    cap.push(w);
+                }
+            }
+        }
+    }
+    cap
 }
 
 /// The nearest point to `center` of the faces of `part` within `lo` of it that connect to the

@@ -51,6 +51,7 @@ mod run;
 mod sides;
 mod solve;
 mod tree;
+mod triangulate;
 
 use std::time::Duration;
 

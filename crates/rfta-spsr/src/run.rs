@@ -37,6 +37,44 @@ struct Octree {
 }
 
 impl Octree {
+    /// The samples' total weight, and the screening weight `alpha` scaled by their average area
+    /// so that it does not depend on their number.
+    fn screening(&self, params: &SpsrParams) -> (f64, f64) {
+        let total_w: f64 = self.samples.iter().map(|s| s.weight).sum();
+        let total_a: f64 = self.samples.iter().map(|s| s.area).sum();
+        (total_w, params.screening * total_a / total_w)
+    }
+
+    /// The normal field's terms and the first pass's systems (no value constraints yet), built
+    /// side by side: they do not depend on each other.
+    fn first_pass(
+        &self,
+        params: &SpsrParams,
+        alpha: f64,
+    ) -> (
+        (Vec<Vec<glam::DVec3>>, solve::DownPass),
+        Vec<solve::LevelSystem>,
+    ) {
+        rayon::join(
+            || {
+                let v = solve::splat_normals(&self.levels, &self.samples);
+                let down = solve::down_pass(&self.levels, &v);
+                (v, down)
+            },
+            || solve::build_systems(&self.levels, &self.samples, &[], params, alpha),
+        )
+    }
+
+    /// The levels rebuilt with `seeds` refined to the finest depth as the samples are; returns
+    /// the levels before.
+    fn refine_around(&mut self, seeds: &[glam::DVec3]) -> Vec<tree::Level> {
+        let t = Instant::now();
+        let rebuilt = tree::build_levels(&self.samples, seeds, self.depth, self.base);
+        let before = std::mem::replace(&mut self.levels, rebuilt);
+        self.time += t.elapsed();
+        before
+    }
+
     fn build(points: &OrientedPoints, params: &SpsrParams) -> Result<Self> {
         if points.len() < 3 {
             return Err(Error::TooFewPoints {
@@ -101,22 +139,12 @@ struct Solved {
 /// a wrong point's cell needs refining ([`crate::reconstruct_with_sides`]).
 fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSet) -> Solved {
     let t = Instant::now();
-    let total_w: f64 = octree.samples.iter().map(|s| s.weight).sum();
-    let total_a: f64 = octree.samples.iter().map(|s| s.area).sum();
-    let alpha = params.screening * total_a / total_w;
+    let (total_w, alpha) = octree.screening(params);
     let base = octree.base;
-    // The normal field's terms and the first pass's systems (no value constraints yet) do not
-    // depend on each other: built side by side.
-    let ((mut v, mut down), first_systems) = rayon::join(
-        || {
-            let v = solve::splat_normals(&octree.levels, &octree.samples);
-            let down = solve::down_pass(&octree.levels, &v);
-            (v, down)
-        },
-        || solve::build_systems(&octree.levels, &octree.samples, &[], params, alpha),
-    );
+    let ((mut v, mut down), first_systems) = octree.first_pass(params, alpha);
     let mut first_systems = Some(first_systems);
-    let mut sides = Sides::in_cube(sides, &octree.frame);
+    let frame = octree.frame;
+    let mut sides = Sides::in_cube(sides, &frame);
     let mut system_time = t.elapsed();
     let mut solve_time = Duration::ZERO;
     // The first solve's solution and iso-value, kept while re-solves run.
@@ -166,8 +194,6 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
         }
         // The octree stays (unless refined below): its node index is copied once, the
         // coefficients each pass.
-        let node_index =
-            |levels: &[tree::Level]| levels.iter().map(|l| l.node_index.clone()).collect();
         let start = resolve.get_or_insert_with(|| solve::WarmStart {
             nodes: node_index(&octree.levels),
             x: Vec::new(),
@@ -190,11 +216,9 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
             // hats that reach it (around the finer cells beside it) are solved without it and
             // undo it. The octree is rebuilt with such points refined as the samples are; the
             // next solve starts from this one's coefficients on the nodes both octrees share.
-            let t = Instant::now();
             seeds.extend(coarse);
-            let rebuilt = tree::build_levels(&octree.samples, &seeds, octree.depth, base);
-            first_levels.get_or_insert(std::mem::replace(&mut octree.levels, rebuilt));
-            octree.time += t.elapsed();
+            let first = octree.refine_around(&seeds);
+            first_levels.get_or_insert(first);
             let t = Instant::now();
             v = solve::splat_normals(&octree.levels, &octree.samples);
             down = solve::down_pass(&octree.levels, &v);
@@ -211,6 +235,11 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
         system_time,
         solve_time,
     }
+}
+
+/// Each level's node index (a re-solve's start on the same nodes).
+fn node_index(levels: &[tree::Level]) -> Vec<crate::keys::SparseIndex> {
+    levels.iter().map(|l| l.node_index.clone()).collect()
 }
 
 /// The surface of `solved` on the octree's levels (the first pass's, when a re-solve pulled it

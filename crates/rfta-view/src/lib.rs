@@ -114,6 +114,58 @@ pub struct Scene {
 
 /// The page: one HTML file holding the scene, three.js and the viewer.
 pub fn html(scene: &Scene) -> String {
+    let data = scene_json(scene);
+    let rows: String = scene
+        .figures
+        .iter()
+        .map(|(k, v)| format!("<tr><th>{}</th><td>{}</td></tr>", escape(k), escape(v)))
+        .collect();
+    let module = |code: &str| format!("data:text/javascript;base64,{}", base64(code.as_bytes()));
+    format!(
+        r#"<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>{title}</title>
+<style>
+body {{ margin: 0; font: 14px system-ui, sans-serif; display: flex; height: 100vh; }}
+#view {{ flex: 1; min-width: 0; position: relative; background: #fff; }}
+#side {{ width: 320px; overflow: auto; padding: 12px; border-left: 1px solid #ddd; }}
+h1 {{ font-size: 16px; margin: 0 0 8px; }}
+table {{ border-collapse: collapse; width: 100%; }}
+th, td {{ text-align: left; padding: 2px 4px; border-bottom: 1px solid #eee; }}
+td {{ font-variant-numeric: tabular-nums; }}
+label {{ display: block; margin: 2px 0; }}
+.swatch {{ display: inline-block; width: 12px; height: 12px; margin-right: 4px; vertical-align: middle; }}
+#error {{ color: #b00; }}
+</style>
+<script type="importmap">{{"imports": {{"three": "{three}", "three/addons/controls/OrbitControls.js": "{orbit}"}}}}</script>
+</head>
+<body>
+<div id="view"></div>
+<div id="side">
+<h1>{title}</h1>
+<div id="error"></div>
+<div id="layers"></div>
+<label><input type="checkbox" id="wireframe"> wireframe</label>
+<label><input type="checkbox" id="through"> see through (what the surface encloses)</label>
+<table>{rows}</table>
+<p>Drag to orbit, scroll to zoom, right-drag to pan.</p>
+</div>
+<script type="application/json" id="scene">{data}</script>
+<script type="module">{viewer}</script>
+</body>
+</html>
+"#,
+        title = escape(&scene.title),
+        three = module(THREE),
+        orbit = module(ORBIT),
+        viewer = VIEWER,
+    )
+}
+
+/// The scene as the viewer reads it: JSON, the arrays as little-endian base64.
+fn scene_json(scene: &Scene) -> String {
     let mut data = String::from("{\"layers\":[");
     for (k, layer) in scene.layers.iter().enumerate() {
         if k > 0 {
@@ -185,53 +237,7 @@ pub fn html(scene: &Scene) -> String {
         ));
     }
     data.push_str("]}");
-    let rows: String = scene
-        .figures
-        .iter()
-        .map(|(k, v)| format!("<tr><th>{}</th><td>{}</td></tr>", escape(k), escape(v)))
-        .collect();
-    let module = |code: &str| format!("data:text/javascript;base64,{}", base64(code.as_bytes()));
-    format!(
-        r#"<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<title>{title}</title>
-<style>
-body {{ margin: 0; font: 14px system-ui, sans-serif; display: flex; height: 100vh; }}
-#view {{ flex: 1; min-width: 0; position: relative; background: #fff; }}
-#side {{ width: 320px; overflow: auto; padding: 12px; border-left: 1px solid #ddd; }}
-h1 {{ font-size: 16px; margin: 0 0 8px; }}
-table {{ border-collapse: collapse; width: 100%; }}
-th, td {{ text-align: left; padding: 2px 4px; border-bottom: 1px solid #eee; }}
-td {{ font-variant-numeric: tabular-nums; }}
-label {{ display: block; margin: 2px 0; }}
-.swatch {{ display: inline-block; width: 12px; height: 12px; margin-right: 4px; vertical-align: middle; }}
-#error {{ color: #b00; }}
-</style>
-<script type="importmap">{{"imports": {{"three": "{three}", "three/addons/controls/OrbitControls.js": "{orbit}"}}}}</script>
-</head>
-<body>
-<div id="view"></div>
-<div id="side">
-<h1>{title}</h1>
-<div id="error"></div>
-<div id="layers"></div>
-<label><input type="checkbox" id="wireframe"> wireframe</label>
-<label><input type="checkbox" id="through"> see through (what the surface encloses)</label>
-<table>{rows}</table>
-<p>Drag to orbit, scroll to zoom, right-drag to pan.</p>
-</div>
-<script type="application/json" id="scene">{data}</script>
-<script type="module">{viewer}</script>
-</body>
-</html>
-"#,
-        title = escape(&scene.title),
-        three = module(THREE),
-        orbit = module(ORBIT),
-        viewer = VIEWER,
-    )
+    data
 }
 
 fn rgb(c: [u8; 3]) -> String {

@@ -90,13 +90,7 @@ fn drawing(
     report.non_negative = pos.len();
     // Spheres with a seed keep it; the others get points of their own (no copy of the sets
     // without seeds: on a 513^3 grid they are 135 million indices).
-    let seeded: Option<Vec<bool>> = seeds.as_ref().map(|s| {
-        let mut seeded = vec![false; n];
-        for &o in &s.owners {
-            seeded[o as usize] = true;
-        }
-        seeded
-    });
+    let seeded: Option<Vec<bool>> = seeds.as_ref().map(|s| owned(&s.owners, n));
     report.seeded = seeds.as_ref().map_or(0, TangentPoints::len);
     let mut parts: Vec<TangentPoints> = seeds.into_iter().collect();
     let mut raster_time = std::time::Duration::ZERO;
@@ -156,10 +150,22 @@ fn drawing(
     journal
         .timings
         .push((crate::Step::InitialPoints, t.elapsed() - raster_time));
-    if cloud.len() < 3 && (neg.is_empty() || pos.is_empty()) {
+    enough(cloud, report, n, [neg.is_empty(), pos.is_empty()])
+}
+
+/// The cloud and its report when it has at least 3 points; otherwise the error that says why:
+/// samples of one sign (`no_sign` says which set is empty) that show no surface, or too few
+/// feasible points among `n` spheres.
+fn enough(
+    cloud: TangentPoints,
+    report: InitialReport,
+    n: usize,
+    [no_negative, no_positive]: [bool; 2],
+) -> Result<(TangentPoints, InitialReport)> {
+    if cloud.len() < 3 && (no_negative || no_positive) {
         return Err(Error::NoSurface {
             samples: n,
-            sign: if neg.is_empty() {
+            sign: if no_negative {
                 "positive (outside)"
             } else {
                 "negative (inside)"
@@ -173,6 +179,15 @@ fn drawing(
         });
     }
     Ok((cloud, report))
+}
+
+/// Which of `n` spheres own one of `owners`.
+fn owned(owners: &[u32], n: usize) -> Vec<bool> {
+    let mut seeded = vec![false; n];
+    for &o in owners {
+        seeded[o as usize] = true;
+    }
+    seeded
 }
 
 /// Empty space next to the spheres of the sign set `set` (the `draw`n ones among them): on a grid

@@ -114,16 +114,7 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         spacing,
         extent,
     } = UnitSquare::new(samples, params);
-    let band = match (samples.as_grid(), params.owner_band) {
-        (Some(_), Some(b)) => b * spacing,
-        _ => f64::INFINITY,
-    };
-    let owners: Vec<usize> = (0..circles.len())
-        .filter(|&i| {
-            let r = circles[i].radius;
-            r > params.tolerance && r < band && clamp.is_none_or(|c| values[i].abs() < c)
-        })
-        .collect();
+    let owners = owners(samples, params, &circles, &values, clamp, spacing);
     let n = samples.len() as f64;
     let res = params
         .raster_resolution
@@ -141,26 +132,9 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         return Err(no_points(samples.len(), &values, cloud.points()));
     }
     let domain = solve_domain(&cloud, &circles, extent);
-    let depth = params.spsr_depth.unwrap_or_else(|| {
-        (rfta_geom::math::log2(domain.side * CELLS_PER_SPACING / spacing).ceil() as u32)
-            .clamp(4, 11)
-    });
-    let spsr_params = SpsrParams {
-        depth,
-        screening: PLANE_SCREENING,
-        cycles: ROUND_CYCLES,
-        ..SpsrParams::default()
-    };
-    let tune = TuneParams {
-        max_points: params.max_points_per_sphere,
-        step: params.transport_step,
-        tolerance: params.tolerance,
-        severe: 0.8,
-    };
-    let final_params = SpsrParams {
-        cycles: SpsrParams::default().cycles,
-        ..spsr_params.clone()
-    };
+    let (spsr_params, final_params) = solver_settings(params, &domain, spacing);
+    let depth = spsr_params.depth;
+    let tune = tune_params(params);
     let solve = |cloud: &rfta_plane::arcs::Owners, last: bool| -> Result<spsr::Solution> {
         let (points, normals) = cloud.oriented(&circles, &values);
         spsr::solve(
@@ -195,15 +169,8 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         // The grid in the unit square, its positions the circles' centres.
         let unit =
             rfta_geom::plane::Grid2::new(g.dims(), (g.origin() - lo) / scale, g.spacing() / scale);
-        let margin = crate::consistency::ENTER_MARGIN * spacing;
         match unit {
-            Ok(grid) if !params.keep_cavities => {
-                rfta_plane::holes::open_holes(&mut curve, &grid, &values, &circles, margin)
-            }
-            Ok(grid) => rfta_plane::holes::Opened {
-                opened: 0,
-                kept: rfta_plane::holes::enclosing(&curve, &grid, &values),
-            },
+            Ok(grid) => holes(params, &mut curve, &grid, &values, &circles, spacing),
             Err(_) => rfta_plane::holes::Opened::default(),
         }
     });
@@ -211,9 +178,7 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         *v = *v * scale + lo;
     }
     let (points, normals) = cloud.oriented(&circles, &values);
-    let points = points
-        .into_iter()
-        .zip(normals)
+    let points = (points.into_iter().zip(normals))
         .map(|(p, n)| (p * scale + lo, n))
         .collect();
     let report = Report2 {
@@ -233,6 +198,79 @@ fn run(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
         points,
         report,
     })
+}
+
+/// The fine-tuning moves' settings.
+fn tune_params(params: &Params) -> TuneParams {
+    TuneParams {
+        max_points: params.max_points_per_sphere,
+        step: params.transport_step,
+        tolerance: params.tolerance,
+        severe: 0.8,
+    }
+}
+
+/// The circles that own points: larger than the tolerance, within [`Params::owner_band`]
+/// spacings on a grid, not clamped.
+fn owners(
+    samples: &Samples2,
+    params: &Params,
+    circles: &[Circle],
+    values: &[f64],
+    clamp: Option<f64>,
+    spacing: f64,
+) -> Vec<usize> {
+    let band = match (samples.as_grid(), params.owner_band) {
+        (Some(_), Some(b)) => b * spacing,
+        _ => f64::INFINITY,
+    };
+    (0..circles.len())
+        .filter(|&i| {
+            let r = circles[i].radius;
+            r > params.tolerance && r < band && clamp.is_none_or(|c| values[i].abs() < c)
+        })
+        .collect()
+}
+
+/// The rounds' and the final solve's settings on `domain`, for samples `spacing` apart (unit
+/// square): [`Params::spsr_depth`] or the depth with `CELLS_PER_SPACING` cells per spacing.
+fn solver_settings(params: &Params, domain: &Domain, spacing: f64) -> (SpsrParams, SpsrParams) {
+    let depth = params.spsr_depth.unwrap_or_else(|| {
+        (rfta_geom::math::log2(domain.side * CELLS_PER_SPACING / spacing).ceil() as u32)
+            .clamp(4, 11)
+    });
+    let rounds = SpsrParams {
+        depth,
+        screening: PLANE_SCREENING,
+        cycles: ROUND_CYCLES,
+        ..SpsrParams::default()
+    };
+    let last = SpsrParams {
+        cycles: SpsrParams::default().cycles,
+        ..rounds.clone()
+    };
+    (rounds, last)
+}
+
+/// The holes of `curve` around outside samples of `grid` (unit square): opened through a wall no
+/// inside sample shows, or, with [`Params::keep_cavities`], counted.
+fn holes(
+    params: &Params,
+    curve: &mut Polylines,
+    grid: &rfta_geom::plane::Grid2,
+    values: &[f64],
+    circles: &[Circle],
+    spacing: f64,
+) -> rfta_plane::holes::Opened {
+    let margin = crate::consistency::ENTER_MARGIN * spacing;
+    if params.keep_cavities {
+        rfta_plane::holes::Opened {
+            opened: 0,
+            kept: rfta_plane::holes::enclosing(curve, grid, values),
+        }
+    } else {
+        rfta_plane::holes::open_holes(curve, grid, values, circles, margin)
+    }
 }
 
 /// The samples as circles in the unit square, normalized as the reference does: the longer side
@@ -417,25 +455,7 @@ fn drop_islands(
     if min_island <= 0.0 || curve.is_empty() {
         return (curve, 0);
     }
-    // Loops: edges grouped by connected vertices; `label[e]` is edge e's loop.
-    let mut sets = rfta_mesh::UnionFind::new(curve.vertices.len());
-    for &[a, b] in &curve.edges {
-        sets.union(a as usize, b as usize);
-    }
-    let mut loops: std::collections::BTreeMap<usize, Vec<[u32; 2]>> = Default::default();
-    for &e in &curve.edges {
-        loops.entry(sets.find(e[0] as usize)).or_default().push(e);
-    }
-    let number: std::collections::HashMap<usize, usize> = loops
-        .keys()
-        .enumerate()
-        .map(|(k, &root)| (root, k))
-        .collect();
-    let label: Vec<usize> = curve
-        .edges
-        .iter()
-        .map(|e| number[&sets.find(e[0] as usize)])
-        .collect();
+    let (loops, label) = loops_of(&curve);
     let whole = PolylineIndex::new(&curve);
     let mut keep = vec![true; loops.len()];
     for (k, edges) in loops.values().enumerate() {
@@ -443,16 +463,7 @@ fn drop_islands(
             vertices: curve.vertices.clone(),
             edges: edges.clone(),
         };
-        let (lo, hi) = edges.iter().flatten().fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &v| {
-                (
-                    lo.min(curve.vertices[v as usize]),
-                    hi.max(curve.vertices[v as usize]),
-                )
-            },
-        );
-        if (hi - lo).length() >= min_island * spacing {
+        if diagonal(&curve.vertices, edges) >= min_island * spacing {
             continue;
         }
         let area: f64 = edges
@@ -524,6 +535,39 @@ fn drop_islands(
     };
     kept.remove_unreferenced_vertices();
     (kept, removed)
+}
+
+/// The loops of `curve` (edges grouped by connected vertices, in the order of their roots) and
+/// each edge's loop.
+fn loops_of(curve: &Polylines) -> (std::collections::BTreeMap<usize, Vec<[u32; 2]>>, Vec<usize>) {
+    let mut sets = rfta_mesh::UnionFind::new(curve.vertices.len());
+    for &[a, b] in &curve.edges {
+        sets.union(a as usize, b as usize);
+    }
+    let mut loops: std::collections::BTreeMap<usize, Vec<[u32; 2]>> = Default::default();
+    for &e in &curve.edges {
+        loops.entry(sets.find(e[0] as usize)).or_default().push(e);
+    }
+    let number: std::collections::HashMap<usize, usize> = loops
+        .keys()
+        .enumerate()
+        .map(|(k, &root)| (root, k))
+        .collect();
+    let label = curve
+        .edges
+        .iter()
+        .map(|e| number[&sets.find(e[0] as usize)])
+        .collect();
+    (loops, label)
+}
+
+/// The diagonal of the bounding box of `edges`' vertices.
+fn diagonal(vertices: &[DVec2], edges: &[[u32; 2]]) -> f64 {
+    let (lo, hi) = edges.iter().flatten().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &v| (lo.min(vertices[v as usize]), hi.max(vertices[v as usize])),
+    );
+    (hi - lo).length()
 }
 
 /// Mean distance from each circle's centre to the nearest other centre (the spacing of scattered

@@ -219,26 +219,7 @@ pub(crate) fn solve(
         };
         // Screening toward the target, minus what the coarser solution already gives (that
         // value per screening cell in parallel, added to the right-hand side in order).
-        let coarse_values: Vec<f64> = sys
-            .screen
-            .par_iter()
-            .with_min_len(GRAIN)
-            .map(|s| {
-                if d == 0 {
-                    return 0.0;
-                }
-                let coarse = &levels[d - 1];
-                let cc = cell_of(s.pos, d as u32 - 1);
-                match coarse.cell(ic(cc)) {
-                    Some(ci) => {
-                        let h = hats_in(s.pos, cc, d as u32 - 1);
-                        let corners = &coarse.corners[ci as usize];
-                        (0..8).map(|k| h[k] * us[d - 1][corners[k] as usize]).sum()
-                    }
-                    None => 0.0,
-                }
-            })
-            .collect();
+        let coarse_values = coarse_at_screening(levels, sys, &us, d);
         for (s, fc) in sys.screen.iter().zip(coarse_values) {
             let corners = &level.corners[s.cell as usize];
             for k in 0..8 {
@@ -277,6 +258,29 @@ pub(crate) fn solve(
         us.push(u);
     }
     Solution { x: xs, u: us }
+}
+
+/// The coarser depths' solution `us` at each screening sample of depth `d` (0 at depth 0).
+fn coarse_at_screening(levels: &[Level], sys: &LevelSystem, us: &[Vec<f64>], d: usize) -> Vec<f64> {
+    sys.screen
+        .par_iter()
+        .with_min_len(GRAIN)
+        .map(|s| {
+            if d == 0 {
+                return 0.0;
+            }
+            let coarse = &levels[d - 1];
+            let cc = cell_of(s.pos, d as u32 - 1);
+            match coarse.cell(ic(cc)) {
+                Some(ci) => {
+                    let h = hats_in(s.pos, cc, d as u32 - 1);
+                    let corners = &coarse.corners[ci as usize];
+                    (0..8).map(|k| h[k] * us[d - 1][corners[k] as usize]).sum()
+                }
+                None => 0.0,
+            }
+        })
+        .collect()
 }
 
 /// Evaluate the implicit function at a unit-cube point: the sum over depths of the hats around it.

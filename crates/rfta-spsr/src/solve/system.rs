@@ -72,54 +72,7 @@ pub(crate) fn build_systems(
             let n = level.n();
             let tables = AxisTables::new(d);
 
-            // Screening cells: samples grouped by their depth-d cell (Morton order is preserved).
-            // As in PoissonRecon (Kazhdan and Hoppe 2013, §4.3; `adaptiveExponent` 1), the
-            // screening weight grows as 2^d with depth: the Laplacian's entries shrink with the
-            // cell width while a cell's samples keep their weight, and this keeps the pull toward
-            // the samples equally strong against the smoothness term at every depth.
-            let depth_scale = f64::from(1u32 << d);
-            let shift = 3 * (depth - d);
-            let mut screen = Vec::new();
-            let mut i = 0;
-            while i < samples.len() {
-                let key = samples[i].key >> shift;
-                let mut j = i;
-                let (mut w, mut p) = (0.0, DVec3::ZERO);
-                while j < samples.len() && samples[j].key >> shift == key {
-                    w += samples[j].weight;
-                    p += samples[j].weight * samples[j].pos;
-                    j += 1;
-                }
-                let cc = crate::keys::demorton(key);
-                if let Some(cell) = level.cell(ic(cc))
-                    && alpha > 0.0
-                {
-                    let pos = p / w;
-                    screen.push(ScreenCell {
-                        cell,
-                        weight: alpha * depth_scale * w,
-                        pos,
-                        hats: hats_in(pos, cc, d),
-                        target: SAMPLE_TARGET,
-                    });
-                }
-                i = j;
-            }
-            // Value constraints act on the depths whose tree reaches them, each on its own.
-            if alpha > 0.0 {
-                for c in constraints {
-                    let cc = cell_of(c.pos, d);
-                    if let Some(cell) = level.cell(ic(cc)) {
-                        screen.push(ScreenCell {
-                            cell,
-                            weight: alpha * depth_scale * c.weight,
-                            pos: c.pos,
-                            hats: hats_in(c.pos, cc, d),
-                            target: c.target,
-                        });
-                    }
-                }
-            }
+            let screen = screening_cells(level, samples, constraints, alpha, depth);
             let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(screen.len() * 8);
             for (s, sc) in screen.iter().enumerate() {
                 for (k, &node) in level.corners[sc.cell as usize].iter().enumerate() {
@@ -175,6 +128,67 @@ pub(crate) fn build_systems(
             sys
         })
         .collect()
+}
+
+/// The screening terms of `level`: the samples grouped by their depth-`d` cell (Morton order is
+/// preserved), then the value constraints the level's tree reaches, each on its own.
+fn screening_cells(
+    level: &Level,
+    samples: &[Sample],
+    constraints: &[ValueConstraint],
+    alpha: f64,
+    depth: u32,
+) -> Vec<ScreenCell> {
+    let d = level.depth;
+    // Screening cells: samples grouped by their depth-d cell (Morton order is preserved).
+    // As in PoissonRecon (Kazhdan and Hoppe 2013, §4.3; `adaptiveExponent` 1), the
+    // screening weight grows as 2^d with depth: the Laplacian's entries shrink with the
+    // cell width while a cell's samples keep their weight, and this keeps the pull toward
+    // the samples equally strong against the smoothness term at every depth.
+    let depth_scale = f64::from(1u32 << d);
+    let shift = 3 * (depth - d);
+    let mut screen = Vec::new();
+    let mut i = 0;
+    while i < samples.len() {
+        let key = samples[i].key >> shift;
+        let mut j = i;
+        let (mut w, mut p) = (0.0, DVec3::ZERO);
+        while j < samples.len() && samples[j].key >> shift == key {
+            w += samples[j].weight;
+            p += samples[j].weight * samples[j].pos;
+            j += 1;
+        }
+        let cc = crate::keys::demorton(key);
+        if let Some(cell) = level.cell(ic(cc))
+            && alpha > 0.0
+        {
+            let pos = p / w;
+            screen.push(ScreenCell {
+                cell,
+                weight: alpha * depth_scale * w,
+                pos,
+                hats: hats_in(pos, cc, d),
+                target: SAMPLE_TARGET,
+            });
+        }
+        i = j;
+    }
+    // Value constraints act on the depths whose tree reaches them, each on its own.
+    if alpha > 0.0 {
+        for c in constraints {
+            let cc = cell_of(c.pos, d);
+            if let Some(cell) = level.cell(ic(cc)) {
+                screen.push(ScreenCell {
+                    cell,
+                    weight: alpha * depth_scale * c.weight,
+                    pos: c.pos,
+                    hats: hats_in(c.pos, cc, d),
+                    target: c.target,
+                });
+            }
+        }
+    }
+    screen
 }
 
 /// 27 neighbour node indices per node (`NONE` when absent), in [`offset`] order. Built for one
