@@ -306,6 +306,15 @@ fn page(
     })
 }
 
+/// A report's figures for a page (`rfta_view::figures`), from its serde form as JSON: the
+/// summary a person reads first, the warnings, then every figure.
+#[pyfunction]
+fn report_figures(report: &str) -> PyResult<Vec<(String, String)>> {
+    let value: serde_json::Value =
+        serde_json::from_str(report).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(rfta_view::figures(&value))
+}
+
 /// The report as a dict: `rfta::Report`'s serde form, and whether the samples were a grid.
 fn report_dict<'py>(py: Python<'py>, r: &rfta::Report, grid: bool) -> PyResult<Bound<'py, PyDict>> {
     let text = serde_json::to_string(r).map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -497,6 +506,7 @@ fn _rfta(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reconstruct_adaptive, m)?)?;
     m.add_function(wrap_pyfunction!(reconstruct_2d, m)?)?;
     m.add_function(wrap_pyfunction!(page, m)?)?;
+    m.add_function(wrap_pyfunction!(report_figures, m)?)?;
     m.add_function(wrap_pyfunction!(screened_poisson, m)?)?;
     m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(signed_distance, m)?)?;

@@ -484,3 +484,19 @@ def test_ctrl_c_stops_an_adaptive_run_between_batches():
     with interrupted_after(0.5), pytest.raises(KeyboardInterrupt):
         rfta.reconstruct(sdf=slow, budget=200_000)
     assert started.is_set() and time.perf_counter() - t < 30
+
+
+def test_warnings_reach_pythons_warnings_and_the_repr_is_short():
+    # A torus clamped at 0.3: the check finds the plateaus and says so, as a warning Python
+    # shows (and a filter can silence), and in the report.
+    S = np.minimum(torus_sdf(grid(16)), 0.3)
+    with pytest.warns(rfta.RftaWarning, match="clamped at 0.3"):
+        r = rfta.reconstruct(S, bounds=(-1, 1))
+    assert any("clamped" in w for w in r.report["warnings"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warnings.filterwarnings("ignore", category=rfta.RftaWarning)
+        rfta.reconstruct(S, bounds=(-1, 1))
+    text = repr(r)
+    assert text.startswith("Reconstruction(") and len(text) < 300, text
+    assert f"{len(r.faces)} faces" in text and "genus 1" in text, text

@@ -35,9 +35,9 @@ mod report;
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
-#[cfg(feature = "samples")]
-pub use report::report_figures;
 pub use report::{Found, face_classes, reconstruction};
+#[cfg(feature = "samples")]
+pub use report::{figures, report_figures};
 
 const THREE: &str = include_str!("../vendor/three/three.module.min.js");
 const ORBIT: &str = include_str!("../vendor/three/OrbitControls.js");

@@ -62,58 +62,92 @@ impl Found {
     }
 }
 
-/// The report's figures for a page (feature `samples`): first a summary a person reads (genus,
-/// components, watertight, samples on the wrong side, spheres entered, thin handles, cavities,
-/// time), the warnings and what the repair changed; then every number, flag and short list of its
-/// serde form, by name.
+/// The report's figures for a page (feature `samples`): [`figures`] of its serde form, with what
+/// the repair changed ([`rfta::Report::changes`]) after the warnings.
 #[cfg(feature = "samples")]
 pub fn report_figures(report: &rfta::Report) -> Vec<(String, String)> {
-    let (m, c, r) = (&report.mesh, &report.consistency, &report.repair);
-    let seconds: f64 = report.timings.iter().map(|(_, t)| t.as_secs_f64()).sum();
+    let value = serde_json::to_value(report).unwrap_or_default();
+    let mut out = figures(&value);
+    let at = out.iter().take_while(|(k, _)| k != "all figures").count();
+    let changes = report
+        .changes()
+        .into_iter()
+        .map(|c| ("repair".to_string(), c));
+    out.splice(at..at, changes);
+    out
+}
+
+/// The figures of a report's serde form (the JSON report, Python's report dict), for a page:
+/// first what a person reads (genus, components, watertight, samples on the wrong side, spheres
+/// entered, thin handles, cavities, time) and the warnings, then every number, flag and short
+/// list by its name.
+#[cfg(feature = "samples")]
+pub fn figures(report: &serde_json::Value) -> Vec<(String, String)> {
+    use serde_json::Value;
+    let field = |k: &str| report.get(k).cloned().unwrap_or(Value::Null);
+    let count = |k: &str| match field(k) {
+        Value::Array(a) => a.len().to_string(),
+        Value::Null => "?".into(),
+        v => v.to_string(),
+    };
+    let seconds: f64 = match field("timings") {
+        Value::Object(t) => t.values().filter_map(Value::as_f64).sum(),
+        _ => f64::NAN,
+    };
     let mut out: Vec<(String, String)> = [
         (
             "genus",
-            m.genus
-                .map_or("undefined (not closed)".into(), |g| g.to_string()),
+            match field("genus") {
+                Value::Null => "undefined (not closed)".into(),
+                g => g.to_string(),
+            },
         ),
-        ("components", m.components.to_string()),
-        ("watertight", if m.watertight { "yes" } else { "no" }.into()),
-        ("samples on the wrong side", c.sign_errors.to_string()),
-        ("spheres entered", c.entered.to_string()),
-        ("thin handles", c.thin_loops.len().to_string()),
+        ("components", count("components")),
+        (
+            "watertight",
+            if field("watertight") == Value::Bool(true) {
+                "yes"
+            } else {
+                "no"
+            }
+            .into(),
+        ),
+        ("samples on the wrong side", count("sign_errors")),
+        ("spheres entered", count("entered")),
+        ("thin handles", count("thin_loops")),
         (
             "cavities",
-            format!("{} left, {} opened", r.cavities, r.cavities_opened),
+            format!(
+                "{} left, {} opened",
+                count("cavities"),
+                count("cavities_opened")
+            ),
         ),
         ("time", format!("{seconds:.2} s")),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
-    out.extend(
-        report
-            .warnings
-            .iter()
-            .map(|w| ("warning".to_string(), w.to_string())),
-    );
-    out.extend(
-        report
-            .changes()
-            .into_iter()
-            .map(|w| ("repair".to_string(), w)),
-    );
-    let Ok(serde_json::Value::Object(all)) = serde_json::to_value(report) else {
-        return out;
-    };
-    out.extend(all.into_iter().filter_map(|(k, v)| match v {
-        serde_json::Value::Number(n) => Some((k, n.to_string())),
-        serde_json::Value::Bool(b) => Some((k, b.to_string())),
-        serde_json::Value::Array(a) if a.len() <= 12 && a.iter().all(|x| x.is_number()) => {
-            let items: Vec<String> = a.iter().map(|x| x.to_string()).collect();
-            Some((k, items.join(", ")))
-        }
-        _ => None,
-    }));
+    if let Value::Array(warnings) = field("warnings") {
+        out.extend(
+            warnings
+                .iter()
+                .filter_map(Value::as_str)
+                .map(|w| ("warning".to_string(), w.to_string())),
+        );
+    }
+    out.push(("all figures".to_string(), String::new()));
+    if let Value::Object(all) = report {
+        out.extend(all.iter().filter_map(|(k, v)| match v {
+            Value::Number(n) => Some((k.clone(), n.to_string())),
+            Value::Bool(b) => Some((k.clone(), b.to_string())),
+            Value::Array(a) if a.len() <= 12 && a.iter().all(Value::is_number) => {
+                let items: Vec<String> = a.iter().map(ToString::to_string).collect();
+                Some((k.clone(), items.join(", ")))
+            }
+            _ => None,
+        }));
+    }
     out
 }
 
@@ -213,5 +247,42 @@ mod tests {
         let classes = face_classes(&mesh);
         let count = |c: u8| classes.iter().filter(|&&k| k == c).count();
         assert_eq!([count(0), count(1), count(2)], n);
+    }
+
+    /// A report's serde form shows what a person reads first, in order, then the warnings, then
+    /// the figures by name; a mesh that is not closed has no genus.
+    #[test]
+    #[cfg(feature = "samples")]
+    fn a_report_opens_with_its_summary() {
+        let report = serde_json::json!({
+            "genus": 2, "components": 1, "watertight": true, "sign_errors": 0, "entered": 3,
+            "thin_loops": [0.5], "cavities": 0, "cavities_opened": 1,
+            "warnings": ["the values look noisy"], "timings": {"a": 0.25, "b": 0.5}
+        });
+        let f = figures(&report);
+        let names: Vec<&str> = f.iter().map(|(k, _)| k.as_str()).take(10).collect();
+        assert_eq!(
+            names,
+            [
+                "genus",
+                "components",
+                "watertight",
+                "samples on the wrong side",
+                "spheres entered",
+                "thin handles",
+                "cavities",
+                "time",
+                "warning",
+                "all figures"
+            ]
+        );
+        let value = |k: &str| f.iter().find(|(n, _)| n == k).map(|(_, v)| v.as_str());
+        assert_eq!(value("genus"), Some("2"));
+        assert_eq!(value("thin handles"), Some("1"));
+        assert_eq!(value("cavities"), Some("0 left, 1 opened"));
+        assert_eq!(value("time"), Some("0.75 s"));
+        assert_eq!(value("entered"), Some("3"));
+        let open = figures(&serde_json::json!({"genus": null}));
+        assert_eq!(open[0].1, "undefined (not closed)");
     }
 }

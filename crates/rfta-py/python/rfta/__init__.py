@@ -24,6 +24,7 @@ message. Results do not depend on the thread count.
 from ._api import (
     NoSurfaceError,
     Reconstruction,
+    RftaWarning,
     Samples,
     marching_cubes,
     reach_for_the_arcs,
@@ -38,6 +39,7 @@ from ._rfta import __version__
 __all__ = [
     "NoSurfaceError",
     "Reconstruction",
+    "RftaWarning",
     "Samples",
     "__version__",
     "marching_cubes",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -11,6 +12,17 @@ import numpy as np
 
 from . import _rfta
 from ._rfta import NoSurfaceError
+
+class RftaWarning(UserWarning):
+    """What a reconstruction tells its caller beside the mesh (the report's ``warnings``):
+    noisy or clamped values, samples the mesh disagrees with, cavities, thin handles. Filter it
+    with ``warnings.filterwarnings("ignore", category=rfta.RftaWarning)``."""
+
+
+def _warn(report: dict) -> None:
+    for w in report.get("warnings", []):
+        warnings.warn(f"rfta: {w}", RftaWarning, stacklevel=3)
+
 
 Bounds = Union[float, Sequence[float], Sequence[Sequence[float]], None]
 Progress = Callable[[str, int, int], Any]
@@ -163,6 +175,23 @@ class Reconstruction:
     ``finest_spacing``, ``oracle_seconds`` and ``rfta_seconds`` apart, one entry per pass in
     ``passes``); ``None`` otherwise. The samples asked for are in ``samples``."""
 
+    def __repr__(self) -> str:
+        r = self.report
+        genus = r.get("genus")
+        parts = [
+            f"{len(self.vertices)} vertices",
+            f"{len(self.faces)} faces",
+            f"genus {genus if genus is not None else 'undefined'}",
+            f"{r.get('components', '?')} component(s)",
+            "watertight" if r.get("watertight") else "NOT watertight",
+            f"{r.get('sign_errors', '?')} samples on the wrong side",
+            f"{r.get('entered', '?')} spheres entered",
+            f"{len(r.get('warnings', []))} warning(s)",
+        ]
+        if self.adaptive is not None:
+            parts.append(f"{self.adaptive.get('evaluations', '?')} evaluations")
+        return f"Reconstruction({', '.join(parts)})"
+
     def to_html(self, path: Optional[str] = None, title: str = "rfta") -> str:
         """The mesh as one HTML page that opens without a network: an interactive 3D view with
         the samples on the wrong side, the spheres entered, thin handles, cavities and islands
@@ -171,12 +200,7 @@ class Reconstruction:
         if self.samples is None:
             raise ValueError("to_html needs the samples: a Reconstruction from rfta.reconstruct")
         values, positions, grid = self.samples
-        figures = [
-            (k, ", ".join(map(str, v)) if isinstance(v, list) else str(v))
-            for k, v in self.report.items()
-            if isinstance(v, (int, float, bool)) or (isinstance(v, list) and len(v) <= 12
-                                                     and all(isinstance(x, (int, float)) for x in v))
-        ] + [("warning", w) for w in self.report.get("warnings", [])]
+        figures = _rfta.report_figures(json.dumps(self.report))
         keywords = dict(positions=positions) if grid is None else dict(
             dims=list(grid[0]), lo=grid[1], hi=grid[2]
         )
@@ -306,6 +330,7 @@ def reconstruct(
             sdf, lo, hi, budget, preset=preset, options=options,
             progress=_printer(verbose, progress),
         )
+        _warn(report)
         return Reconstruction(
             V, F, P, N, report, samples=(values, positions, None), adaptive=adaptive
         )
@@ -342,6 +367,7 @@ def reconstruct(
     V, F, P, N, report = _run(
         S.ravel(), positions, grid, preset, options, _printer(verbose, progress)
     )
+    _warn(report)
     return Reconstruction(V, F, P, N, report, samples=(S.ravel(), positions, grid))
 
 

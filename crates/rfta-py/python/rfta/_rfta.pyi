@@ -55,6 +55,7 @@ def page(
     title: str = "rfta",
     figures: Sequence[Tuple[str, str]] = ...,
 ) -> str: ...
+def report_figures(report: str) -> list[Tuple[str, str]]: ...
 def reconstruct_2d(
     values: npt.NDArray[np.float64],
     positions: npt.NDArray[np.float64],
