@@ -86,5 +86,11 @@ pub(crate) fn demo(args: DemoArgs, ui: &Ui) -> Result<()> {
         2.0 / res as f64,
         genus.map_or("n/a (several components)".into(), |g| g.to_string())
     ));
+    if rx > mx {
+        ui.say(format!(
+            "(a vertex distance favours marching cubes' largest: its vertices sit on grid edges, where the samples pin the surface, and its faces cut across between them unmeasured; rfta's largest, {:.2} of a spacing, is where the two tori meet in a crease that its smooth surface rounds)",
+            rx * res as f64 / 2.0
+        ));
+    }
     write(&args.output, &out.mesh, ui)
 }
