@@ -281,7 +281,7 @@ impl Samples2 {
     }
 }
 
-/// Polylines: vertices and directed edges `a -> b`. Closed loops from [`contour`] and the 2D
+/// Polylines: vertices and directed edges `a -> b`. Closed loops from marching squares (`rfta_mc::marching_squares`) and the 2D
 /// pipeline have the inside on the left of every edge.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Polylines {

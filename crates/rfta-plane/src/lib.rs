@@ -1,5 +1,6 @@
-//! Reach for the Arcs in the plane (Sellán, Ren, Batty and Stein, SIGGRAPH 2024, Figure 5): the
-//! stages of the 2D pipeline, which `rfta::plane::reconstruct` composes.
+//! Reach for the Arcs in the plane (Sellán, Ren, Batty and Stein, SIGGRAPH 2024, Figure 5): the 2D
+//! pipeline, [`reconstruct`]`(&Samples2, &PlaneParams)`, and its stages (`rfta::plane` runs it
+//! with the input check and `rfta::Params`).
 //!
 //! Each 2D SDF sample `(p_i, s_i)` is a circle of radius `|s_i|` that the curve touches without
 //! entering.
@@ -39,8 +40,14 @@
 
 pub mod arcs;
 pub mod holes;
+mod islands;
+mod params;
+mod pipeline;
 pub mod raster;
 pub mod spsr;
+
+pub use params::{Error, PlaneParams, Result};
+pub use pipeline::{Reconstruction2, Report2, reconstruct};
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;

@@ -22,6 +22,10 @@
 //! is built, and the mesh (finite vertices, degenerate faces, watertightness, components) before
 //! it is returned.
 
+mod plane;
+
+pub(crate) use plane::samples2;
+
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
