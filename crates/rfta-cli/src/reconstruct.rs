@@ -285,15 +285,20 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
         ui.say(format!("warning: {w}"));
     }
     ui.say(format!(
-        "{} vertices, {} faces, {} component(s), {} in {seconds:.2} s",
+        "{} vertices, {} faces, {} component(s), genus {}, {}, {} samples on the wrong side, {} spheres entered, in {seconds:.2} s",
         out.mesh.n_vertices(),
         out.mesh.n_faces(),
         r.mesh.components,
+        r.mesh
+            .genus
+            .map_or_else(|| "undefined".to_string(), |g| g.to_string()),
         if r.mesh.watertight {
             "watertight"
         } else {
             "NOT watertight"
         },
+        r.consistency.sign_errors,
+        r.consistency.entered,
     ));
 }
 
