@@ -19,7 +19,7 @@ macro_rules! out {
 }
 
 /// 2D samples: count, grid or scattered, bounds, signs and value range.
-fn describe_2d(path: &Path, s: &rfta_geom::plane::Samples2) -> Result<()> {
+fn describe_2d(path: &Path, s: &rfta_geom::plane::SdfSamples2) -> Result<()> {
     out!("{}: 2D SDF samples", path.display());
     match s.as_grid() {
         Some(g) => {

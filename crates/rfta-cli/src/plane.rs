@@ -7,12 +7,12 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use rfta::Params;
 use rfta::geom::glam::DVec2;
-use rfta::geom::plane::{Grid2, Polylines, Samples2};
+use rfta::geom::plane::{Grid2, Polylines, SdfSamples2};
 
 use crate::ui::{Exit, Ui};
 
 /// The 2D samples of `input`, with `--bounds` (x and y of it) for grids without a sidecar.
-fn read(input: &Path, bounds: Option<rfta_io::GridBounds>) -> Result<Samples2> {
+fn read(input: &Path, bounds: Option<rfta_io::GridBounds>) -> Result<SdfSamples2> {
     let b = bounds.map(|b| (b.min.truncate(), b.max.truncate()));
     Ok(rfta_io::read_sdf_2d(input, b)?)
 }
@@ -147,7 +147,7 @@ pub(crate) fn reconstruct(
 fn write_page(
     path: &Path,
     input: &Path,
-    samples: &Samples2,
+    samples: &SdfSamples2,
     out: &rfta::plane::Reconstruction2,
     ui: &Ui,
 ) -> Result<()> {
@@ -246,7 +246,7 @@ pub(crate) fn demo(output: &Path, res: usize, params: &Params, ui: &Ui) -> Resul
     let values: Vec<f64> = (0..grid.len())
         .map(|i| demo_shape(grid.position(i)))
         .collect();
-    let samples = Samples2::grid(grid, values.clone())?;
+    let samples = SdfSamples2::grid(grid, values.clone())?;
     ui.say(format!(
         "demo --2d: a rounded square with a hole and a notch, sampled on a {0} x {0} grid",
         res + 1

@@ -2,17 +2,17 @@
 //!
 //! A 2D sample `(p_i, s_i)` is a circle of radius `|s_i|` that the curve touches without entering
 //! (the paper's Figure 5). The 2D types mirror the 3D ones ([`Grid2`] ~ [`crate::Grid`],
-//! [`Samples2`] ~ [`crate::SdfSamples`]); the output is [`Polylines`], closed loops with the inside
+//! [`SdfSamples2`] ~ [`crate::SdfSamples`]); the output is [`Polylines`], closed loops with the inside
 //! on their left (outer loops counter-clockwise).
 //!
 //! ```
-//! use rfta_geom::plane::{Grid2, Polylines, Samples2};
+//! use rfta_geom::plane::{Grid2, Polylines, SdfSamples2};
 //! use rfta_geom::glam::DVec2;
 //!
 //! // The unit circle's SDF on a 33 x 33 grid over [-2, 2]^2.
 //! let grid = Grid2::from_bounds([33, 33], DVec2::splat(-2.0), DVec2::splat(2.0)).expect("valid test input");
 //! let values: Vec<f64> = (0..grid.len()).map(|i| grid.position(i).length() - 1.0).collect();
-//! let samples = Samples2::grid(grid, values).expect("valid test input");
+//! let samples = SdfSamples2::grid(grid, values).expect("valid test input");
 //! assert_eq!(samples.len(), 33 * 33);
 //! // A square, counter-clockwise: one closed loop.
 //! let square = Polylines::new(
@@ -148,13 +148,13 @@ impl Grid2 {
 
 /// Validated 2D SDF samples: on a [`Grid2`] or at scattered positions.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Samples2 {
+pub struct SdfSamples2 {
     positions: Vec<DVec2>,
     values: Vec<f64>,
     grid: Option<Grid2>,
 }
 
-impl Samples2 {
+impl SdfSamples2 {
     /// Samples on a grid, `values` in the grid's order.
     ///
     /// # Errors
@@ -432,11 +432,11 @@ mod tests {
         assert!(Grid2::new([1, 5], DVec2::ZERO, DVec2::ONE).is_err());
         assert!(Grid2::new([5, 5], DVec2::ZERO, DVec2::new(0.0, 1.0)).is_err());
         let grid = Grid2::new([2, 2], DVec2::ZERO, DVec2::ONE).expect("valid test input");
-        assert!(Samples2::grid(grid, vec![0.0; 4]).is_err());
-        assert!(Samples2::grid(grid, vec![1.0, f64::NAN, 1.0, -1.0]).is_err());
-        assert!(Samples2::grid(grid, vec![1.0; 3]).is_err());
+        assert!(SdfSamples2::grid(grid, vec![0.0; 4]).is_err());
+        assert!(SdfSamples2::grid(grid, vec![1.0, f64::NAN, 1.0, -1.0]).is_err());
+        assert!(SdfSamples2::grid(grid, vec![1.0; 3]).is_err());
         let p = vec![DVec2::ZERO, DVec2::ZERO, DVec2::ONE];
-        assert!(Samples2::scattered(p, vec![1.0, 2.0, -1.0]).is_err());
+        assert!(SdfSamples2::scattered(p, vec![1.0, 2.0, -1.0]).is_err());
         assert!(Polylines::new(vec![DVec2::ZERO], vec![[0, 1]]).is_err());
     }
 }

@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{Grid2, Polylines, Samples2};
+use rfta_geom::plane::{Grid2, Polylines, SdfSamples2};
 
 use crate::error::{ParseError, ParseResult};
 use crate::text::{as_text, parse_f64};
@@ -95,7 +95,7 @@ pub fn is_sdf_2d(path: &Path) -> Result<bool> {
 /// # Errors
 /// [`Error::Io`], [`Error::Parse`] naming the file (and line), [`Error::UnknownFormat`], or
 /// [`Error::Geom`] for samples that fail validation (NaN, all zero, a 1-pixel image).
-pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Samples2> {
+pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<SdfSamples2> {
     let bytes = read_bytes(path)?;
     let geom = |source| Error::Geom {
         path: path.to_path_buf(),
@@ -143,9 +143,9 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
                             )
                         })
                         .unzip();
-                    Samples2::scattered(p, v)
+                    SdfSamples2::scattered(p, v)
                 }
-                &[nx, ny] => Samples2::grid(grid([nx, ny])?.0, arr.data),
+                &[nx, ny] => SdfSamples2::grid(grid([nx, ny])?.0, arr.data),
                 other => {
                     return Err(ParseError::new(format!(
                         "expected a 2-D grid of shape (nx, ny) or rows of shape (n, 3), found shape {other:?}"
@@ -156,7 +156,7 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
         }
         Some("csv" | "txt" | "xyz") => {
             let (p, v) = parse_rows(&bytes).map_err(|e| e.at(path))?;
-            Samples2::scattered(p, v)
+            SdfSamples2::scattered(p, v)
         }
         Some("png") => {
             let (dims, pixels) = decode_png(&bytes).map_err(|e| e.at(path))?;
@@ -168,7 +168,7 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
                 ))
                 .at(path)
             })?;
-            Samples2::grid(
+            SdfSamples2::grid(
                 g,
                 pixels
                     .iter()
@@ -178,7 +178,7 @@ pub fn read_sdf_2d(path: &Path, bounds: Option<(DVec2, DVec2)>) -> Result<Sample
         }
         Some("exr") => {
             let (dims, values) = exr_volume::parse_image(&bytes).map_err(|e| e.at(path))?;
-            Samples2::grid(grid(dims)?.0, values)
+            SdfSamples2::grid(grid(dims)?.0, values)
         }
         _ => {
             return Err(Error::UnknownFormat {

@@ -22,7 +22,7 @@ use rfta_geom::plane::{Grid2, Polylines};
 /// Loops that reach the grid's border end there open.
 ///
 /// # Panics
-/// If `values.len() != grid.len()` (a caller bug; validated inputs come from [`rfta_geom::plane::Samples2`]).
+/// If `values.len() != grid.len()` (a caller bug; validated inputs come from [`rfta_geom::plane::SdfSamples2`]).
 pub fn marching_squares(grid: &Grid2, values: &[f64], iso: f64) -> Polylines {
     let [nx, ny] = grid.dims();
     assert_eq!(values.len(), nx * ny, "one value per grid point");

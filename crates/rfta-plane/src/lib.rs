@@ -1,5 +1,5 @@
 //! Reach for the Arcs in the plane (Sellán, Ren, Batty and Stein, SIGGRAPH 2024, Figure 5): the 2D
-//! pipeline, [`reconstruct`]`(&Samples2, &PlaneParams)`, and its stages (`rfta::plane` runs it
+//! pipeline, [`reconstruct`]`(&SdfSamples2, &PlaneParams)`, and its stages (`rfta::plane` runs it
 //! with the input check and `rfta::Params`).
 //!
 //! Each 2D SDF sample `(p_i, s_i)` is a circle of radius `|s_i|` that the curve touches without

@@ -4,13 +4,13 @@
 //!
 //! ```
 //! use rfta_geom::glam::DVec2;
-//! use rfta_geom::plane::{Grid2, Samples2};
+//! use rfta_geom::plane::{Grid2, SdfSamples2};
 //! use rfta_plane::{PlaneParams, reconstruct};
 //!
 //! // A disc of radius 0.5 sampled on a 17 x 17 grid over [-1, 1]^2.
 //! let grid = Grid2::from_bounds([17, 17], DVec2::splat(-1.0), DVec2::splat(1.0)).expect("valid test input");
 //! let values = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
-//! let samples = Samples2::grid(grid, values).expect("valid test input");
+//! let samples = SdfSamples2::grid(grid, values).expect("valid test input");
 //! let out = reconstruct(&samples, &PlaneParams::default()).expect("valid test input");
 //! assert_eq!(out.curve.loops(), 1);
 //! assert!(out.curve.vertices.iter().all(|v| (v.length() - 0.5).abs() < 0.01));
@@ -19,7 +19,7 @@
 use std::time::Instant;
 
 use rfta_geom::glam::DVec2;
-use rfta_geom::plane::{Polylines, Samples2};
+use rfta_geom::plane::{Polylines, SdfSamples2};
 use rfta_mesh::PolylineIndex;
 
 use crate::arcs::{Circle, TuneParams};
@@ -93,7 +93,7 @@ pub struct Reconstruction2 {
 /// # Errors
 /// [`Error::NoSurface`] when no circle has a free arc of the side a curve needs,
 /// [`Error::TooFewPoints`], [`Error::Solve`].
-pub fn reconstruct(samples: &Samples2, params: &PlaneParams) -> Result<Reconstruction2> {
+pub fn reconstruct(samples: &SdfSamples2, params: &PlaneParams) -> Result<Reconstruction2> {
     let start = Instant::now();
     let UnitSquare {
         lo,
@@ -203,7 +203,7 @@ fn tune_params(params: &PlaneParams) -> TuneParams {
 /// The circles that own points: larger than the tolerance, within [`PlaneParams::owner_band`]
 /// spacings on a grid, not clamped.
 fn owners(
-    samples: &Samples2,
+    samples: &SdfSamples2,
     params: &PlaneParams,
     circles: &[Circle],
     values: &[f64],
@@ -285,7 +285,7 @@ struct UnitSquare {
 }
 
 impl UnitSquare {
-    fn new(samples: &Samples2, params: &PlaneParams) -> Self {
+    fn new(samples: &SdfSamples2, params: &PlaneParams) -> Self {
         let (lo, hi) = samples.bounds();
         let scale = (hi - lo).max_element().max(f64::MIN_POSITIVE);
         let unit = |p: DVec2| (p - lo) / scale;

@@ -21,7 +21,7 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use rfta_geom::glam::{DVec2, DVec3};
-use rfta_geom::plane::{Grid2, Samples2};
+use rfta_geom::plane::{Grid2, SdfSamples2};
 use rfta_geom::{OrientedPoints, TriMesh};
 
 mod convert;
@@ -242,8 +242,8 @@ fn reconstruct_2d<'py>(
         )));
     }
     let samples = match Grid2::fit(&p) {
-        Some((grid, index)) => Samples2::grid(grid, in_grid_order(&index, &values)),
-        None => Samples2::scattered(p, values),
+        Some((grid, index)) => SdfSamples2::grid(grid, in_grid_order(&index, &values)),
+        None => SdfSamples2::scattered(p, values),
     }
     .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let out = py

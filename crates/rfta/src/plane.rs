@@ -4,18 +4,18 @@
 //! ```
 //! use rfta::{Params, plane};
 //! use rfta::geom::glam::DVec2;
-//! use rfta::geom::plane::{Grid2, Samples2};
+//! use rfta::geom::plane::{Grid2, SdfSamples2};
 //!
 //! // A disc of radius 0.5 sampled on a 17 x 17 grid over [-1, 1]^2.
 //! let grid = Grid2::from_bounds([17, 17], DVec2::splat(-1.0), DVec2::splat(1.0)).expect("valid test input");
 //! let values = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
-//! let samples = Samples2::grid(grid, values).expect("valid test input");
+//! let samples = SdfSamples2::grid(grid, values).expect("valid test input");
 //! let out = plane::reconstruct(&samples, &Params::default()).expect("valid test input");
 //! assert_eq!(out.curve.loops(), 1);
 //! assert!(out.curve.vertices.iter().all(|v| (v.length() - 0.5).abs() < 0.01));
 //! ```
 
-use rfta_geom::plane::Samples2;
+use rfta_geom::plane::SdfSamples2;
 use rfta_plane::PlaneParams;
 pub use rfta_plane::{Reconstruction2, Report2};
 
@@ -32,7 +32,7 @@ use crate::{Error, Params, Result};
 /// [`Error::InvalidParams`] (also when [`Params::genus`] is given), [`Error::NotADistance`],
 /// [`Error::NoSurface`] when no circle has a free arc of the side a curve needs,
 /// [`Error::TooFewPoints`], [`Error::ThreadPool`].
-pub fn reconstruct(samples: &Samples2, params: &Params) -> Result<Reconstruction2> {
+pub fn reconstruct(samples: &SdfSamples2, params: &Params) -> Result<Reconstruction2> {
     params.validate()?;
     if let Some(g) = params.genus {
         return Err(Error::InvalidParams(format!(

@@ -1,15 +1,15 @@
 //! The 2D pipeline on analytic shapes with known answers.
 
 use rfta::geom::glam::DVec2;
-use rfta::geom::plane::{Grid2, Polylines, Samples2};
+use rfta::geom::plane::{Grid2, Polylines, SdfSamples2};
 use rfta::{Params, plane};
 use rfta_mesh::PolylineIndex;
 
-fn grid_samples(n: usize, sdf: impl Fn(DVec2) -> f64) -> Samples2 {
+fn grid_samples(n: usize, sdf: impl Fn(DVec2) -> f64) -> SdfSamples2 {
     let grid =
         Grid2::from_bounds([n + 1, n + 1], DVec2::splat(-1.0), DVec2::splat(1.0)).expect("grid");
     let values = (0..grid.len()).map(|i| sdf(grid.position(i))).collect();
-    Samples2::grid(grid, values).expect("samples")
+    SdfSamples2::grid(grid, values).expect("samples")
 }
 
 /// Mean and largest |sdf| over the curve's vertices (the vertices' distance to the true curve for
@@ -156,7 +156,7 @@ fn scattered_samples_give_the_circle_too() {
         .map(|_| DVec2::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0))
         .collect();
     let values = positions.iter().map(|&p| circle(p)).collect();
-    let samples = Samples2::scattered(positions, values).expect("samples");
+    let samples = SdfSamples2::scattered(positions, values).expect("samples");
     let out = plane::reconstruct(&samples, &Params::default()).expect("curve");
     assert_eq!(out.curve.loops(), 1);
     let (mean, max) = vertex_error(&out.curve, circle);

@@ -77,7 +77,7 @@ impl Domain {
 
 /// Why a 2D solve was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SpsrError {
+pub enum Error {
     /// Fewer than two points.
     #[error("screened Poisson needs at least 2 oriented points, got {0}")]
     TooFewPoints(usize),
@@ -138,14 +138,14 @@ const COARSEST: u32 = 2;
 /// Solve for `chi` from oriented points (normals pointing out of the shape), in `domain`.
 ///
 /// # Errors
-/// [`SpsrError`]: too few points, mismatched or non-finite input, a point outside the domain,
+/// [`Error`]: too few points, mismatched or non-finite input, a point outside the domain,
 /// invalid settings.
 pub fn solve(
     points: &[DVec2],
     normals: &[DVec2],
     domain: Domain,
     params: &SpsrParams,
-) -> Result<Solution, SpsrError> {
+) -> Result<Solution, Error> {
     check(points, normals, domain, params)?;
     let depth = params.depth;
     let coarsest = COARSEST.min(depth);
@@ -157,7 +157,7 @@ pub fn solve(
     let m = levels[depth as usize].line.n + 1;
     let h = cell_side(domain, depth);
     let grid = Grid2::new([m, m], domain.min, DVec2::splat(h))
-        .map_err(|e| SpsrError::InvalidParams(e.to_string()))?;
+        .map_err(|e| Error::InvalidParams(e.to_string()))?;
     let mut solution = Solution {
         grid,
         values: x,
@@ -181,15 +181,15 @@ fn check(
     normals: &[DVec2],
     domain: Domain,
     params: &SpsrParams,
-) -> Result<(), SpsrError> {
+) -> Result<(), Error> {
     if points.len() != normals.len() {
-        return Err(SpsrError::LengthMismatch {
+        return Err(Error::LengthMismatch {
             points: points.len(),
             normals: normals.len(),
         });
     }
     if points.len() < 2 {
-        return Err(SpsrError::TooFewPoints(points.len()));
+        return Err(Error::TooFewPoints(points.len()));
     }
     let valid = (1..=12).contains(&params.depth)
         && params.screening >= 0.0
@@ -198,7 +198,7 @@ fn check(
         && domain.side.is_finite()
         && domain.min.is_finite();
     if !valid {
-        return Err(SpsrError::InvalidParams(format!(
+        return Err(Error::InvalidParams(format!(
             "depth {} (1 to 12), screening {}, domain side {}",
             params.depth, params.screening, domain.side
         )));
@@ -206,10 +206,10 @@ fn check(
     let max = domain.min + DVec2::splat(domain.side);
     for (i, (p, n)) in points.iter().zip(normals).enumerate() {
         if !p.is_finite() || !n.is_finite() || n.length_squared() == 0.0 {
-            return Err(SpsrError::BadPoint(i));
+            return Err(Error::BadPoint(i));
         }
         if p.cmplt(domain.min).any() || p.cmpgt(max).any() {
-            return Err(SpsrError::OutsideDomain(i));
+            return Err(Error::OutsideDomain(i));
         }
     }
     Ok(())

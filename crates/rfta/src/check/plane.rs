@@ -3,13 +3,13 @@
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-use rfta_geom::plane::Samples2;
+use rfta_geom::plane::SdfSamples2;
 
 use crate::{Error, Result};
 
 /// Refuses 2D samples that are not a signed distance ([`separation`]) or look inside-positive
 /// ([`sign_convention`]).
-pub(crate) fn samples2(samples: &Samples2, max_fraction: f64) -> Result<()> {
+pub(crate) fn samples2(samples: &SdfSamples2, max_fraction: f64) -> Result<()> {
     separation(samples, max_fraction)?;
     sign_convention(samples)
 }
@@ -21,7 +21,7 @@ pub(crate) fn samples2(samples: &Samples2, max_fraction: f64) -> Result<()> {
 /// of the distance is an occupancy image or a field in other units than the positions, and
 /// reconstructing from it gives a wrong curve or none. (The 3D check also detects clamps and
 /// measures noise; in 2D this is the whole check.)
-fn separation(samples: &Samples2, max_fraction: f64) -> Result<()> {
+fn separation(samples: &SdfSamples2, max_fraction: f64) -> Result<()> {
     let (p, v) = (samples.positions(), samples.values());
     let mut severe = 0;
     for negative in [true, false] {
@@ -61,7 +61,7 @@ fn separation(samples: &Samples2, max_fraction: f64) -> Result<()> {
 /// Refuses an inside-positive field as the 3D check does (`looks_flipped`): the
 /// samples around the set (a grid's outer rows and columns; otherwise the twentieth farthest from
 /// the centre of their box) nearly all negative, around positive ones.
-fn sign_convention(samples: &Samples2) -> Result<()> {
+fn sign_convention(samples: &SdfSamples2) -> Result<()> {
     let (p, v) = (samples.positions(), samples.values());
     let on_grid = samples.as_grid().map(|g| {
         let [nx, ny] = g.dims();
