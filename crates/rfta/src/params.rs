@@ -29,11 +29,9 @@ pub struct Params {
     pub max_points_per_sphere: usize,
     /// Spheres in each feasibility batch, drawn with replacement, the paper's `b` (10^4; 0 = all).
     pub batch_size: usize,
-    /// Screening weight of the Poisson solves, in `rfta-spsr`'s units (30), at depths up to
-    /// `SCREENING_FULL_DEPTH` (9); each depth beyond halves it ([`screening_at`]). The reference
-    /// runs PoissonRecon with 10; on the same tangency points in the reference's setting (box
-    /// 3.2) our solver needs about 30 for the same fit (bunny, N = 30: PoissonRecon at 10 reaches
-    /// Chamfer 0.00717, ours 0.00905 at 10 and 0.00679 at 30; see docs/spsr.md).
+    /// Screening weight of the Poisson solves, in `rfta-spsr`'s units (30), at depths up to 9;
+    /// each depth beyond halves it ([`screening_at`]). The reference runs PoissonRecon with 10,
+    /// for which our solver needs about 30 on the same points (docs/spsr.md).
     pub screening: f64,
     /// Octree depth of the Poisson solves, on a box 3.2 times the unit box as in the reference;
     /// `None` matches it to the sample spacing ([`spsr_depth_for`]). The reference always runs 10.
@@ -157,57 +155,33 @@ fn zero_is_none<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<f
     Ok(Option::<f64>::deserialize(d)?.filter(|&b| b != 0.0))
 }
 
-/// Cells of the finest octree depth per sample spacing that [`spsr_depth_for`] aims at.
-///
-/// Chosen by measurement (docs/speed.md): on the dev shapes at N = 10 to 50, 4 cells per spacing
-/// give the same mean Chamfer as the reference's fixed depth 10 at a fraction of the time, and
-/// fewer cells lose accuracy.
+/// Cells of the finest octree depth per sample spacing that [`spsr_depth_for`] aims at: fewer
+/// lose accuracy, more cost time for none (measured in docs/speed.md).
 pub(crate) const CELLS_PER_SPACING: f64 = 4.0;
 
-/// The default [`Params::owner_band`]: spheres within 3 sample spacings of the surface own points.
-///
-/// Measured on the dev shapes (docs/speed.md): the far spheres' points repeat, less precisely,
-/// what the near spheres say; without them the mean Chamfer drops by 9% (N = 10), 25% (N = 20)
-/// and 39% (N = 30) and the time by 2-6x, with one shape in eight more losing its genus.
+/// The default [`Params::owner_band`]: spheres within 3 sample spacings of the surface own points;
+/// the far ones' points only repeat, less precisely, what the near ones say (docs/speed.md).
 pub(crate) const OWNER_BAND: f64 = 3.0;
 
 /// With an owner band, only spheres smaller than this many owner radii are rasterized for the
-/// empty space: an owner's start is the empty space nearest its centre, at about its own radius,
-/// and a far sphere (shrunk like every sphere to 0.95 of its squared radius, so short of the
-/// surface by more than a near one) only fills what lies between nearer spheres. The union of the
-/// drawn spheres ends where the larger ones would begin; empty cells there, whose nearest sample
-/// was not drawn, are dropped.
-///
-/// Measured (docs/speed.md): on the dev set at N = 10, 20, 30 every mesh's Chamfer is the same
-/// as with every sphere drawn (at 2 owner radii, knight at N = 30 lost 4%); the 129^3 bunny's
-/// rasterization takes 2.0 s instead of 24.5 s.
+/// empty space: a far sphere only fills what lies between nearer ones (docs/speed.md).
 pub(crate) const RASTER_REACH: f64 = 3.0;
 
 /// The box of the Poisson solves, in unit boxes (the reference's `point_cloud_to_mesh`).
 const SPSR_BOX: f64 = 3.2;
 
-/// Depth up to which the Poisson octree is a complete grid. PoissonRecon's 5 is for a box 1.1
-/// times the cloud; in the reference's 3.2 box the cloud spans 10 cells at depth 5 and 2.5 at
-/// depth 3. Measured (docs/speed.md): 3 keeps the Chamfer and cuts the time of small inputs 3x
-/// (the complete depth-5 grid was most of a solve at N = 10).
+/// Depth up to which the Poisson octree is a complete grid: in the reference's 3.2 box the cloud
+/// spans 2.5 cells at depth 3, and a deeper complete grid was most of a small input's time
+/// (docs/speed.md).
 pub(crate) const SPSR_FULL_DEPTH: u32 = 3;
 
-/// Gauss-Seidel sweeps per depth of the solves inside the fine-tuning rounds (the final solve
-/// keeps PoissonRecon's 8). A round's surface only guides the next moves of the points, at most
-/// `tau` each; measured on the dev shapes (docs/speed.md): half the sweeps keep the mean Chamfer
-/// within 2% (N = 10 to 50: +0.3%, -1.2%, -0.1%, +1.6%) for 13 to 21% less time.
+/// Gauss-Seidel sweeps per depth of the rounds' solves (the final solve keeps PoissonRecon's 8):
+/// a round's surface only guides the next moves (docs/speed.md).
 pub(crate) const ROUND_SWEEPS: usize = 4;
 
 /// The deepest Poisson solve that runs the full [`Params::screening`]; each depth beyond halves
-/// it ([`screening_at`]).
-///
-/// Measured on the dev shapes (docs/faithfulness.md): at 30 on depth 11 (N = 100) a surface that
-/// follows a stray tangency point grows a fin or a thin handle in the gaps between sample
-/// spheres, the cut rule moves the neighbouring spheres' points onto it and the next solve
-/// follows them (knight: points more than half a spacing off the true surface 12 to 396 over the
-/// ten rounds, 23,955 spheres entered at the end, genus 7 instead of 0); weaker screening there
-/// leaves such a point to its neighbours. Up to depth 9 (N = 30) 30 is the most accurate; at
-/// depth 10 (N = 50) 15 is more accurate than 30 and gets more genera right.
+/// it ([`screening_at`]), so that fine solves do not follow a stray point into a fin or a thin
+/// handle (docs/faithfulness.md, "weaker screening on fine grids").
 pub(crate) const SCREENING_FULL_DEPTH: u32 = 9;
 
 /// The screening weight the solves at `depth` run for a [`Params::screening`] of `screening`:
@@ -217,30 +191,15 @@ pub fn screening_at(screening: f64, depth: u32) -> f64 {
     screening / f64::from(1u32 << beyond.min(16))
 }
 
-/// The deepest Poisson solve whose fine-tuning rounds run as the reference's: at the final solve's
-/// depth, with feasibility batches drawn from every sphere. Beyond it the rounds solve one depth
-/// coarser ([`Params::round_spsr_params`]) and draw their batches from the spheres near the
-/// surface (those the initial points draw: [`RASTER_REACH`] owner radii).
-///
-/// A round's surface only says where each sphere's points move next, by at most `tau`; and on a
-/// 129^3 grid 92% of the spheres lie beyond the near ones, so a batch of every sphere held about
-/// 260 that can meet a tangency point. Measured (docs/speed.md, item 33): at depth 11 (N = 100)
-/// the dev shapes' mean Chamfer 0.000911 to 0.000904, thin loops 12 to 6; the 129^3 bunny 30.5
-/// to 17.5 s of wall time at Chamfer 0.000462 to 0.000463. At depth 10 (N = 50) the coarser
-/// rounds cost accuracy (0.002894 to 0.002903) and the near batches were within the seeds' noise
-/// at N = 30, so up to depth 10 the rounds stay the reference's.
+/// The deepest Poisson solve whose rounds run as the reference's; beyond it they solve one depth
+/// coarser ([`Params::round_spsr_params`]) and draw their batches from the spheres near the surface
+/// (`RASTER_REACH` owner radii): a round's surface only guides the next moves (docs/speed.md,
+/// item 33).
 pub(crate) const ROUND_FULL_DEPTH: u32 = 10;
 
 /// Handles whose loop is shorter than this many of the final solve's finest cells are cut
-/// ([`crate::RepairReport::sub_cell_handles_cut`], `rfta_repair::cut_sub_cell_handles`): a
-/// thread or a pinhole the extraction leaves where the Poisson function has a saddle at the
-/// iso-value, not a feature of the function.
-///
-/// Measured (docs/faithfulness.md, "handles narrower than a cell"): the extra handles of the dev
-/// shapes at N = 100 (thingi44395 genus 3 of 2, thingi54725 13 of 11) and of fandisk at N = 50
-/// (2 of 0) have loops of 0.26 to 1.9 finest cells (0.02 to 0.16 spacings); cut below 2 cells,
-/// every dev shape at N = 100 has its genus in one piece and no thin loop, N = 50 seven of
-/// eight; below 4 cells also cuts handles of thingi54725 at N = 10 that it has (genus 9 of 11).
+/// ([`crate::RepairReport::sub_cell_handles_cut`]): a thread or pinhole of the extraction at a
+/// saddle, not a feature (docs/faithfulness.md, "handles narrower than a cell").
 pub(crate) const SUB_CELL_LOOP: f64 = 2.0;
 
 /// The screened Poisson depth whose finest cell, on the reference's box of 3.2 unit boxes, is at

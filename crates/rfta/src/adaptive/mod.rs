@@ -351,16 +351,10 @@ fn final_pass(
     })
 }
 
-/// Cells of the final pass's finest Poisson depth per finest sample spacing (a grid's solves
-/// have [`crate::CELLS_PER_SPACING`]; [`Params::spsr_depth`], when set, rules instead).
-///
-/// The finest spacing is reached only near the surface's hardest parts. Measured on the dev
-/// shapes (docs/eval/adaptive.md): at 30,000 evaluations the depth matched to it as on a grid
-/// (12 on four shapes) was no more accurate than 10 or 9 (mean Chamfer 0.001136 against
-/// 0.001074 and 0.001132), while its ten rounds' solves and a mesh 2 to 4 times larger were
-/// most of the run; one cell per spacing (depth 10) left samples' spheres entered (45 over the
-/// eight shapes at 30,000, 60 at 10,000, one sample on the wrong side), two (depth 11) 0 to 4
-/// per shape.
+/// Cells of the final pass's finest Poisson depth per finest sample spacing (a grid's solves have
+/// `CELLS_PER_SPACING`; [`Params::spsr_depth`], when set, rules instead): the finest spacing is
+/// reached only near the hardest parts, and a depth matched to it costs time for no accuracy
+/// (docs/eval/adaptive.md).
 pub(crate) const FINAL_CELLS_PER_SPACING: f64 = 2.0;
 
 /// The final pass's screened Poisson depth: [`FINAL_CELLS_PER_SPACING`] cells per finest
