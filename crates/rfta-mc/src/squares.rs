@@ -104,15 +104,7 @@ pub fn marching_squares(grid: &Grid2, values: &[f64], iso: f64) -> Polylines {
 mod tests {
     use super::*;
     use rfta_geom::glam::DVec2;
-
-    fn circle_grid(n: usize, r: f64) -> (Grid2, Vec<f64>) {
-        let grid = Grid2::from_bounds([n, n], DVec2::splat(-1.0), DVec2::splat(1.0))
-            .expect("valid test input");
-        let values = (0..grid.len())
-            .map(|i| grid.position(i).length() - r)
-            .collect();
-        (grid, values)
-    }
+    use rfta_testkit::circle_grid;
 
     #[test]
     fn a_circle_contours_to_one_closed_counter_clockwise_loop_on_it() {

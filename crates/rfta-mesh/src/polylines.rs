@@ -226,15 +226,7 @@ impl<'a> PolylineIndex<'a> {
 mod tests {
     use super::*;
     use rfta_geom::plane::Grid2;
-
-    fn circle_grid(n: usize, r: f64) -> (Grid2, Vec<f64>) {
-        let grid = Grid2::from_bounds([n, n], DVec2::splat(-1.0), DVec2::splat(1.0))
-            .expect("valid test input");
-        let values = (0..grid.len())
-            .map(|i| grid.position(i).length() - r)
-            .collect();
-        (grid, values)
-    }
+    use rfta_testkit::circle_grid;
 
     #[test]
     fn an_annulus_gives_two_loops_with_the_hole_clockwise() {

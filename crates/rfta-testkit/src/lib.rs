@@ -63,3 +63,14 @@ pub fn input_names(data: &std::path::Path) -> Vec<String> {
 
 /// Shapes with exact signed distance functions (moved to `rfta_geom`, where the demos use them).
 pub use rfta_geom::Analytic;
+
+/// The SDF of the circle of radius `r` about the origin on the `n` x `n` grid over `[-1, 1]^2`.
+pub fn circle_grid(n: usize, r: f64) -> (rfta_geom::plane::Grid2, Vec<f64>) {
+    use rfta_geom::glam::DVec2;
+    let grid = rfta_geom::plane::Grid2::from_bounds([n, n], DVec2::splat(-1.0), DVec2::splat(1.0))
+        .expect("a valid grid");
+    let values = (0..grid.len())
+        .map(|i| grid.position(i).length() - r)
+        .collect();
+    (grid, values)
+}
