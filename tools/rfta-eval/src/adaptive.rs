@@ -21,6 +21,7 @@ use rfta_mesh::MeshIndex;
 use rfta_metrics::MeshSummary;
 
 use crate::chart::{Line, line_chart};
+use crate::mise::Mise;
 use crate::shapes::{Shape, Source};
 
 /// `cargo xtask eval adaptive`'s arguments.
@@ -40,6 +41,11 @@ pub(crate) struct Args {
     scoring: crate::table::Scoring,
     #[command(flatten)]
     tuning: crate::table::Tuning,
+    /// MISE's venv (built by `bash ../shared/peer-tests/mise/build.sh VENV`; default
+    /// `$RFTA_MISE_VENV`): MISE to 128^3 on each shape, and rfta at its evaluations and at a
+    /// third of them.
+    #[arg(long, value_name = "VENV")]
+    mise: Option<std::path::PathBuf>,
     /// The run's folder (default: `<target>/eval/adaptive-<pid>`).
     #[arg(long, value_name = "DIR")]
     out: Option<std::path::PathBuf>,
@@ -52,11 +58,16 @@ pub(crate) fn command(a: &Args) -> Result<()> {
         a.out.as_deref(),
         &format!("adaptive-{}", std::process::id()),
     )?;
+    let mise = Mise::find(a.mise.as_deref())?;
+    if mise.is_none() {
+        println!("SKIPPED MISE: no venv (--mise VENV or RFTA_MISE_VENV)");
+    }
     run(
         &shapes,
         &a.budgets,
         a.scoring.samples,
         &a.tuning.options(),
+        mise.as_ref(),
         &out,
     )?;
     println!("wrote {}", out.display());
@@ -102,6 +113,7 @@ fn run(
     budgets: &[usize],
     samples: usize,
     tuning: &serde_json::Map<String, serde_json::Value>,
+    mise: Option<&Mise>,
     out: &Path,
 ) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -141,9 +153,8 @@ fn run(
         (row.chamfer, _) = score(&mesh)?;
         row.summary = Some(MeshSummary::of(&mesh));
         rows.push(row);
-        for &budget in budgets {
-            // The adaptive run.
-            let mut row = base(budget, "rfta-adaptive", 0);
+        // rfta asking the shape's exact distance, at most `budget` times.
+        let adaptive = |mut row: Row, budget: usize| -> Result<Row> {
             let mut oracle = |p: &[DVec3]| -> Result<Vec<f64>, rfta::adaptive::OracleError> {
                 Ok(gt.signed_distances(p))
             };
@@ -171,13 +182,22 @@ fn run(
                 Err(e) => row.status = e.to_string(),
             }
             println!(
-                "{} {budget}: Chamfer {:.6}, genus {:?} in {} component(s), {:.2} s",
+                "{} {budget} {}: Chamfer {:.6}, genus {:?} in {} component(s), {:.2} s",
                 shape.name,
+                row.method,
                 row.chamfer,
                 row.summary.as_ref().and_then(|s| s.genus),
                 row.summary.as_ref().map_or(0, |s| s.components),
                 row.rfta_seconds
             );
+            Ok(row)
+        };
+        if let Some(mise) = mise {
+            rows.extend(beside_mise(mise, shape, out, &score, &base, &adaptive)?);
+        }
+        for &budget in budgets {
+            // The adaptive run.
+            let row = adaptive(base(budget, "rfta-adaptive", 0), budget)?;
             rows.push(row);
             // The grid with about as many points.
             let n = grid_cells(budget);
@@ -212,6 +232,36 @@ fn run(
         rows.iter()
             .map(|r| (format!("{} {} {}", r.shape, r.budget, r.method), &r.status)),
     )
+}
+
+/// MISE on `shape` (its mesh written beside the outputs for the runner), then rfta at MISE's
+/// evaluations and at a third of them: the rows `mise`, `rfta-at-mise`, `rfta-at-mise/3`.
+fn beside_mise(
+    mise: &Mise,
+    shape: &Shape,
+    out: &Path,
+    score: &dyn Fn(&TriMesh) -> Result<(f64, MeshSummary)>,
+    base: &dyn Fn(usize, &'static str, usize) -> Row,
+    adaptive: &dyn Fn(Row, usize) -> Result<Row>,
+) -> Result<Vec<Row>> {
+    let gt_path = out.join(format!("{}-gt.obj", shape.name));
+    rfta_io::write_mesh(&gt_path, &shape.gt)?;
+    let run = mise.run(&gt_path, &out.join(format!("{}-mise.obj", shape.name)))?;
+    let e = run.evaluations;
+    let mut row = base(e, "mise", e);
+    (row.chamfer, _) = score(&run.mesh)?;
+    row.summary = Some(MeshSummary::of(&run.mesh));
+    row.rfta_seconds = run.seconds;
+    row.oracle_seconds = run.oracle_seconds;
+    println!(
+        "{} MISE: {e} evaluations, Chamfer {:.6}, {:.2} s",
+        shape.name, row.chamfer, run.seconds
+    );
+    Ok(vec![
+        row,
+        adaptive(base(e, "rfta-at-mise", 0), e)?,
+        adaptive(base(e / 3, "rfta-at-mise/3", 0), e / 3)?,
+    ])
 }
 
 fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
@@ -300,6 +350,7 @@ fn write_markdown(path: &Path, rows: &[Row], budgets: &[usize]) -> Result<()> {
             }
         }
     }
+    s.push_str(&beside_mise_table(rows));
     s.push_str("\n## Per shape\n\nChamfer, genus/components (ground truth's genus in the shape column), thin loops, wrong side, entered, rfta s (+ oracle s).\n\n| shape | budget | method | Chamfer | genus/comps | thin | wrong | entered | s |\n|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         let summary = r.summary.as_ref();
@@ -337,6 +388,62 @@ fn write_markdown(path: &Path, rows: &[Row], budgets: &[usize]) -> Result<()> {
     }
     std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
+}
+
+/// The section beside MISE, when it ran: per shape MISE's evaluations, Chamfer, topology and
+/// own time, rfta's at as many evaluations and at a third of them, then the means.
+fn beside_mise_table(rows: &[Row]) -> String {
+    let of =
+        |shape: &str, method: &str| rows.iter().find(|r| r.shape == shape && r.method == method);
+    let cell = |r: Option<&Row>| {
+        r.map_or("- | - | -".to_string(), |r| {
+            let topology = r.summary.as_ref().map_or("-".to_string(), |s| {
+                format!(
+                    "{}/{}",
+                    s.genus.map_or("-".into(), |g| g.to_string()),
+                    s.components
+                )
+            });
+            format!("{:.6} | {topology} | {:.2}", r.chamfer, r.rfta_seconds)
+        })
+    };
+    let mise: Vec<&Row> = rows.iter().filter(|r| r.method == "mise").collect();
+    if mise.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "\n## Beside MISE\n\nMISE (Occupancy Networks' multiresolution isosurface extraction, \
+         `../shared/peer-tests/mise`, r0 16, depth 3: 128^3) on each shape's exact distance, \
+         and rfta's adaptive mode at MISE's evaluations and at a third of them. Chamfer, \
+         genus/components, seconds outside the oracle.\n\n\
+         | shape | MISE evaluations | MISE Chamfer | genus/comps | s | rfta at as many | genus/comps | s | rfta at a third | genus/comps | s |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for m in &mise {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} |\n",
+            m.shape,
+            m.evaluations,
+            cell(Some(m)),
+            cell(of(&m.shape, "rfta-at-mise")),
+            cell(of(&m.shape, "rfta-at-mise/3")),
+        ));
+    }
+    let mean = |method: &str| {
+        let c: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.method == method && r.chamfer.is_finite())
+            .map(|r| r.chamfer)
+            .collect();
+        c.iter().sum::<f64>() / c.len().max(1) as f64
+    };
+    s.push_str(&format!(
+        "\nMean Chamfer: MISE {:.6}, rfta at as many evaluations {:.6}, at a third {:.6}.\n",
+        mean("mise"),
+        mean("rfta-at-mise"),
+        mean("rfta-at-mise/3")
+    ));
+    s
 }
 
 /// Mean Chamfer against evaluations (log10 on the x axis).

@@ -26,6 +26,7 @@ mod adaptive;
 mod bench;
 mod chart;
 mod method;
+mod mise;
 mod plane;
 mod render;
 mod report;
