@@ -443,6 +443,41 @@ fn beside_mise_table(rows: &[Row]) -> String {
         mean("rfta-at-mise"),
         mean("rfta-at-mise/3")
     ));
+    s.push_str(&time_table(rows));
+    s
+}
+
+/// Mean seconds to the mesh per method, its own time plus its evaluations at an oracle cost of
+/// 1 us, 100 us and 10 ms each (a fast analytic SDF, a small network on a CPU, a large one),
+/// beside its mean Chamfer: what a user with a callable field weighs.
+fn time_table(rows: &[Row]) -> String {
+    let methods = ["mise", "rfta-at-mise", "rfta-at-mise/3", "mc-129"];
+    let mut s = String::from(
+        "\nSeconds to the mesh, rfta's or MISE's own time plus the evaluations at each oracle \
+         cost (means over the shapes):\n\n\
+         | method | mean evaluations | mean Chamfer | own s | 1 us each | 100 us each | 10 ms each |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for method in methods {
+        let mine: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.method == method && r.chamfer.is_finite())
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let n = mine.len() as f64;
+        let evals = mine.iter().map(|r| r.evaluations as f64).sum::<f64>() / n;
+        let chamfer = mine.iter().map(|r| r.chamfer).sum::<f64>() / n;
+        let own = mine.iter().map(|r| r.rfta_seconds).sum::<f64>() / n;
+        let at = |cost: f64| own + evals * cost;
+        s.push_str(&format!(
+            "| {method} | {evals:.0} | {chamfer:.6} | {own:.2} | {:.2} | {:.2} | {:.1} |\n",
+            at(1e-6),
+            at(1e-4),
+            at(1e-2)
+        ));
+    }
     s
 }
 
@@ -478,4 +513,45 @@ fn chart(path: &Path, rows: &[Row], budgets: &[usize]) -> Result<()> {
         &series,
         1,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: &'static str, evaluations: usize, chamfer: f64, seconds: f64) -> Row {
+        Row {
+            shape: "s".into(),
+            budget: evaluations,
+            method,
+            evaluations,
+            chamfer,
+            summary: None,
+            gt_genus: None,
+            consistency: None,
+            rfta_seconds: seconds,
+            oracle_seconds: 0.0,
+            passes: 0,
+            status: "ok".into(),
+        }
+    }
+
+    /// The time to a mesh is the method's own time plus its evaluations at each oracle cost,
+    /// averaged over the shapes: 2,000 evaluations and 0.2 s of its own at 10 ms an evaluation
+    /// is 20.2 s.
+    #[test]
+    fn the_time_to_a_mesh_adds_the_oracles_cost() {
+        let rows = [
+            row("mise", 1000, 0.001, 0.1),
+            row("mise", 3000, 0.003, 0.3),
+            row("rfta-at-mise", 2000, f64::NAN, 9.0),
+        ];
+        let table = time_table(&rows);
+        assert!(
+            table.contains("| mise | 2000 | 0.002000 | 0.20 | 0.20 | 0.40 | 20.2 |"),
+            "{table}"
+        );
+        // A method without a finished row has no line.
+        assert!(!table.contains("| rfta-at-mise |"), "{table}");
+    }
 }
