@@ -500,3 +500,33 @@ def test_warnings_reach_pythons_warnings_and_the_repr_is_short():
     text = repr(r)
     assert text.startswith("Reconstruction(") and len(text) < 300, text
     assert f"{len(r.faces)} faces" in text and "genus 1" in text, text
+
+
+def test_a_callable_may_answer_with_a_tensor_on_any_device():
+    # A stand-in for a PyTorch tensor on a GPU with gradients: numpy cannot take it as it is.
+    class Tensor:
+        def __init__(self, values, device="cuda"):
+            self.values, self.device = values, device
+
+        def detach(self):
+            return Tensor(self.values, self.device)
+
+        def cpu(self):
+            return Tensor(self.values, "cpu")
+
+        def numpy(self):
+            assert self.device == "cpu", "numpy() of a tensor on a GPU"
+            return self.values
+
+        def __array__(self, *_):
+            raise TypeError("can't convert cuda tensor to numpy")
+
+    asked = []
+
+    def sdf(p):
+        asked.append(len(p))
+        return Tensor(np.linalg.norm(p, axis=1) - 0.5)
+
+    r = rfta.reconstruct(sdf=sdf, bounds=(-1, 1), budget=2000)
+    assert r.adaptive["evaluations"] == sum(asked) <= 2000
+    assert r.report["components"] == 1 and r.report["genus"] == 0

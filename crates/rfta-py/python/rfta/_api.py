@@ -19,6 +19,19 @@ class RftaWarning(UserWarning):
     with ``warnings.filterwarnings("ignore", category=rfta.RftaWarning)``."""
 
 
+def _host(sdf: Callable[[np.ndarray], Any]) -> Callable[[np.ndarray], Any]:
+    """``sdf`` with its answer brought to the host: a tensor (PyTorch's, on any device, with or
+    without gradients) as a numpy array; anything else as it is."""
+
+    def ask(points: np.ndarray) -> Any:
+        answer = sdf(points)
+        if all(hasattr(answer, m) for m in ("detach", "cpu", "numpy")):
+            answer = answer.detach().cpu().numpy()
+        return answer
+
+    return ask
+
+
 def _warn(report: dict) -> None:
     for w in report.get("warnings", []):
         warnings.warn(f"rfta: {w}", RftaWarning, stacklevel=3)
@@ -284,9 +297,10 @@ def reconstruct(
     sdf : callable, optional
         Instead of ``S``: the signed distance function itself, asked where the reconstruction
         needs it (adaptive sampling) over ``bounds``, at most ``budget`` times. It takes an
-        (n, 3) float64 array of points and returns their n values, as anything
-        ``numpy.asarray`` takes (a PyTorch model: ``lambda p: model(torch.from_numpy(p)).
-        detach().numpy()``). An exception it raises reaches the caller as itself; a NaN, an
+        (n, 3) float64 array of points, many at once (a few batches a pass), and returns their
+        n values, as anything ``numpy.asarray`` takes or a PyTorch tensor on any device, with or
+        without gradients (a model: ``lambda p: model(torch.from_numpy(p).to(device))``). An
+        exception it raises reaches the caller as itself; a NaN, an
         infinite value or the wrong number of values raises ``ValueError`` naming the batch.
         Ctrl-C stops between batches.
     budget : int, optional
@@ -327,7 +341,7 @@ def reconstruct(
             initial=initial, threads=threads,
         )
         V, F, P, N, report, adaptive, positions, values = _rfta.reconstruct_adaptive(
-            sdf, lo, hi, budget, preset=preset, options=options,
+            _host(sdf), lo, hi, budget, preset=preset, options=options,
             progress=_printer(verbose, progress),
         )
         _warn(report)
