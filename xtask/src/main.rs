@@ -176,7 +176,29 @@ fn python(root: &Path, cargo: &str) -> Result<()> {
             &mesh.display().to_string(),
         ],
         &[],
-    )
+    )?;
+    // A neural SDF (the numpy twin: CI installs no torch) meshed by rfta, marching cubes and,
+    // where installed, MISE, each scored against the dev bunny.
+    match rfta_testkit::data_dir() {
+        Some(data) => {
+            println!("==> crates/rfta-py/examples/neural_sdf.py --numpy");
+            let bunny = data.join("inputs/bunny/gt.obj");
+            run(
+                &bin.join("python"),
+                &[
+                    "crates/rfta-py/examples/neural_sdf.py",
+                    "--numpy",
+                    "--mesh",
+                    &bunny.display().to_string(),
+                ],
+                &[],
+            )
+        }
+        None => {
+            skipped("crates/rfta-py/examples/neural_sdf.py: ../shared/data not found".into());
+            Ok(())
+        }
+    }
 }
 
 /// The repository root (the parent of this crate's directory).
