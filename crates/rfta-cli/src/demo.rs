@@ -1,5 +1,5 @@
-//! `rfta demo`: a built-in shape with holes, reconstructed from a grid (or asked adaptively), beside
-//! marching cubes.
+//! `rfta demo`: a built-in shape with holes, reconstructed from a grid (or asked adaptively),
+//! beside marching cubes.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

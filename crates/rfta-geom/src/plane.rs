@@ -2,8 +2,8 @@
 //!
 //! A 2D sample `(p_i, s_i)` is a circle of radius `|s_i|` that the curve touches without entering
 //! (the paper's Figure 5). The 2D types mirror the 3D ones ([`Grid2`] ~ [`crate::Grid`],
-//! [`SdfSamples2`] ~ [`crate::SdfSamples`]); the output is [`Polylines`], closed loops with the inside
-//! on their left (outer loops counter-clockwise).
+//! [`SdfSamples2`] ~ [`crate::SdfSamples`]); the output is [`Polylines`], closed loops with the
+//! inside on their left (outer loops counter-clockwise).
 //!
 //! ```
 //! use rfta_geom::plane::{Grid2, Polylines, SdfSamples2};
@@ -281,8 +281,8 @@ impl SdfSamples2 {
     }
 }
 
-/// Polylines: vertices and directed edges `a -> b`. Closed loops from marching squares (`rfta_mc::marching_squares`) and the 2D
-/// pipeline have the inside on the left of every edge.
+/// Polylines: vertices and directed edges `a -> b`. Closed loops from marching squares
+/// (`rfta_mc::marching_squares`) and the 2D pipeline have the inside on the left of every edge.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Polylines {
     /// Vertex positions.

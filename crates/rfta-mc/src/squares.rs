@@ -13,8 +13,9 @@
 
 use rfta_geom::plane::{Grid2, Polylines};
 
-/// Marching squares, the 2D baseline and the 2D screened Poisson extraction: the curve
-/// `value = iso` of the bilinear interpolant of `values` on `grid`, as polylines with one vertex per crossed grid edge and the inside (`value < iso`) on the left.
+/// Marching squares, the 2D baseline and the 2D screened Poisson extraction: the curve `value =
+/// iso` of the bilinear interpolant of `values` on `grid`, as polylines with one vertex per crossed
+/// grid edge and the inside (`value < iso`) on the left.
 ///
 /// Along a grid edge the interpolant is linear, so every vertex lies exactly on the level set; in
 /// a cell whose corners alternate in sign the bilinear saddle value decides which corners the

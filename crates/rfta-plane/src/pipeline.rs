@@ -65,8 +65,8 @@ pub struct Report2 {
     /// Holes around outside samples opened through a wall that no inside sample shows (unless
     /// [`PlaneParams::keep_cavities`]; grids only: [`crate::holes`]).
     pub holes_opened: usize,
-    /// Holes around outside samples in the output: walled in by inside samples (a void the
-    /// samples show), or kept by [`PlaneParams::keep_cavities`] or for want of a channel that enters no
+    /// Holes around outside samples in the output: walled in by inside samples (a void the samples
+    /// show), or kept by [`PlaneParams::keep_cavities`] or for want of a channel that enters no
     /// circle.
     pub holes: usize,
     /// Seconds, whole reconstruction.

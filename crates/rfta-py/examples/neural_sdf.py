@@ -145,7 +145,7 @@ def mise(model):
         from mise import MISE
     except ImportError:
         return None
-    m, n, p = MISE(16, 3, 0.0), 0, None
+    m, n = MISE(16, 3, 0.0), 0
     p = m.query()
     while len(p):
         X = -1.0 + 2.0 * p / m.resolution

@@ -14,11 +14,11 @@ use crate::edit::{Incidence, Splitter, apply_moves};
 pub(crate) const PUSH_PASSES: usize = 8;
 
 /// The surface may not enter a sample sphere (Sellán et al. 2024, §3), yet the final screened
-/// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners,
-/// thin parts). Each vertex inside some sphere by more than `depth` (in the spheres' frame) moves radially onto
-/// the boundary of the sphere it is deepest in, up to `PUSH_PASSES` (8) times; the connectivity
-/// stays, and the moves are taken without folding the surface ([`apply_moves`]). The targets do
-/// not depend on one another, so the result does not depend on the thread count.
+/// Poisson surface is smooth and cuts into the spheres where the shape is not (edges, corners, thin
+/// parts). Each vertex inside some sphere by more than `depth` (in the spheres' frame) moves
+/// radially onto the boundary of the sphere it is deepest in, up to `PUSH_PASSES` (8) times; the
+/// connectivity stays, and the moves are taken without folding the surface ([`apply_moves`]). The
+/// targets do not depend on one another, so the result does not depend on the thread count.
 pub fn push_out_of_spheres(
     mesh: &mut TriMesh,
     spheres: &Spheres<'_>,
@@ -76,16 +76,16 @@ pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
 /// them (a bulge at a corner, where many far spheres touch the same point), and the near ones are
 /// cut wherever the shape is sharper than the surface (edges, corners, thin parts).
 ///
-/// Each round finds every sphere (of `all`) the mesh enters by more than `depth` (in the spheres' frame): the
-/// first round every sphere, the later ones those entered before and those holding a vertex that
-/// moved. Where no vertex of the cutting face lies in the sphere, a vertex is put at the face's
-/// point nearest the centre (`split_where_entered`). Then each vertex inside entered spheres
-/// moves along its normal (inward out of positive spheres, outward out of negative ones) or
+/// Each round finds every sphere (of `all`) the mesh enters by more than `depth` (in the spheres'
+/// frame): the first round every sphere, the later ones those entered before and those holding a
+/// vertex that moved. Where no vertex of the cutting face lies in the sphere, a vertex is put at
+/// the face's point nearest the centre (`split_where_entered`). Then each vertex inside entered
+/// spheres moves along its normal (inward out of positive spheres, outward out of negative ones) or
 /// radially away from the deepest sphere's centre, whichever leaves all of them sooner
 /// (`leave_along`), as long as that is within `CLEAR_REACH` (0.5) and meets no sphere of the other
-/// sign; the moves are taken without folding the surface ([`apply_moves`]). At most
-/// `CLEAR_ROUNDS` (6) rounds. Vertices move in index order, so the result does not depend on the
-/// thread count. Returns how many vertices were added.
+/// sign; the moves are taken without folding the surface ([`apply_moves`]). At most `CLEAR_ROUNDS`
+/// (6) rounds. Vertices move in index order, so the result does not depend on the thread count.
+/// Returns how many vertices were added.
 pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, depth: f64) -> usize {
     use rayon::prelude::*;
     let reach = CLEAR_REACH * spheres.spacing;
@@ -271,9 +271,10 @@ fn nearest_around(
 }
 
 /// Where no vertex of the nearest face lies inside an entered sphere (`found`: the sphere and the
-/// mesh's nearest point to its centre, on `part`, the mesh in the spheres' frame, whose faces around
-/// each vertex `incident` holds), a vertex is put at that nearest point ([`Splitter::split`]; the
-/// new faces lie in the old ones' planes). Returns how many vertices were added.
+/// mesh's nearest point to its centre, on `part`, the mesh in the spheres' frame, whose faces
+/// around each vertex `incident` holds), a vertex is put at that nearest point
+/// ([`Splitter::split`]; the new faces lie in the old ones' planes). Returns how many vertices were
+/// added.
 fn split_where_entered(
     mesh: &mut TriMesh,
     part: &TriMesh,

@@ -11,16 +11,16 @@ pub(crate) const DENT_BELOW: f64 = 0.5;
 /// How far beyond its sphere a dent's new vertex lands, in sample spacings.
 pub(crate) const DENT_MARGIN: f64 = 0.05;
 
-/// A sample less than `DENT_BELOW` (0.5) spacings `h` from the surface (and more than `sign_margin`:
-/// nearer, its side is not reliable), with the mesh as near, on the
-/// wrong side of the mesh: a face cuts its small sphere, or passes just beyond it (the faces are
-/// about a quarter of a spacing across, so no vertex need lie inside, and moving the surface
-/// away from the sample would leave it on the wrong side). The mesh's point nearest the sample
-/// moves through the sphere to just beyond its far side, on the line from that point through the
-/// sample (`DENT_MARGIN` (0.05) past the sphere): a new vertex there ([`Splitter::split`]: the face,
-/// or both faces beside the edge, split), or the vertex itself. The sample then lies in a shallow
-/// dent, on its own side. Not made where a face would turn over. Samples are taken in order, so
-/// the result does not depend on the thread count. Returns how many dents were made.
+/// A sample less than `DENT_BELOW` (0.5) spacings `h` from the surface (and more than
+/// `sign_margin`: nearer, its side is not reliable), with the mesh as near, on the wrong side of
+/// the mesh: a face cuts its small sphere, or passes just beyond it (the faces are about a quarter
+/// of a spacing across, so no vertex need lie inside, and moving the surface away from the sample
+/// would leave it on the wrong side). The mesh's point nearest the sample moves through the sphere
+/// to just beyond its far side, on the line from that point through the sample (`DENT_MARGIN`
+/// (0.05) past the sphere): a new vertex there ([`Splitter::split`]: the face, or both faces beside
+/// the edge, split), or the vertex itself. The sample then lies in a shallow dent, on its own side.
+/// Not made where a face would turn over. Samples are taken in order, so the result does not depend
+/// on the thread count. Returns how many dents were made.
 pub fn dent_wrong_side(
     mesh: &mut TriMesh,
     samples: &SdfSamples,

@@ -240,23 +240,21 @@ pub fn reconstruct(points: &OrientedPoints, params: &SpsrParams) -> Result<Recon
 
 /// [`reconstruct`], with points known to lie inside or outside the surface.
 ///
-/// The screened Poisson energy pulls the indicator function toward 1/2 at the samples. Here,
-/// after the first solve, every side point where the function is not at least `SIDE_MARGIN` (0.02)
-/// on its side of the iso-value becomes a screening term of its own, with the target
-/// iso ± `SIDE_TARGET` (0.1) and weight `SIDE_WEIGHT` (1.0), and the system is solved again on the same
-/// octree, starting from the solution before (`SIDE_RESOLVE_SWEEPS` (2) sweeps); up to
-/// `SIDE_PASSES` (4) times, each adding the points still wrong and multiplying the
-/// weight of those that stay wrong by `SIDE_WEIGHT_GROWTH` (4.0). This is the screening term with a
-/// target per point, in the spirit of the envelope constraints of Kazhdan, Chuang, Rusinkiewicz
-/// and Hoppe ("Poisson Surface Reconstruction with Envelope Constraints", SGP 2020), applied only
-/// where the plain solution disagrees. A wrong side point whose cell the octree does not refine
-/// to its finest depth gets its cell refined (the octree rebuilt as if a sample were there): a
-/// constraint on coarse depths alone is undone by the finer hats beside it. Side points outside
-/// the reconstruction cube are ignored, and re-solves whose surface reaches the cube's faces
-/// (where it would come out open) are dropped for the first solve's surface when that one stays
-/// inside.
-/// [`SpsrReport::side_errors`] says how many were wrong after each solve whose surface it
-/// returns.
+/// The screened Poisson energy pulls the indicator function toward 1/2 at the samples. Here, after
+/// the first solve, every side point where the function is not at least `SIDE_MARGIN` (0.02) on its
+/// side of the iso-value becomes a screening term of its own, with the target iso ± `SIDE_TARGET`
+/// (0.1) and weight `SIDE_WEIGHT` (1.0), and the system is solved again on the same octree,
+/// starting from the solution before (`SIDE_RESOLVE_SWEEPS` (2) sweeps); up to `SIDE_PASSES` (4)
+/// times, each adding the points still wrong and multiplying the weight of those that stay wrong by
+/// `SIDE_WEIGHT_GROWTH` (4.0). This is the screening term with a target per point, in the spirit of
+/// the envelope constraints of Kazhdan, Chuang, Rusinkiewicz and Hoppe ("Poisson Surface
+/// Reconstruction with Envelope Constraints", SGP 2020), applied only where the plain solution
+/// disagrees. A wrong side point whose cell the octree does not refine to its finest depth gets its
+/// cell refined (the octree rebuilt as if a sample were there): a constraint on coarse depths alone
+/// is undone by the finer hats beside it. Side points outside the reconstruction cube are ignored,
+/// and re-solves whose surface reaches the cube's faces (where it would come out open) are dropped
+/// for the first solve's surface when that one stays inside. [`SpsrReport::side_errors`] says how
+/// many were wrong after each solve whose surface it returns.
 ///
 /// ```
 /// use rfta_spsr::{OrientedPoints, SidePoint, SpsrParams, glam::DVec3, reconstruct_with_sides};

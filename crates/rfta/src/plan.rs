@@ -61,6 +61,9 @@ pub(crate) struct Plan<'a> {
     /// Whether the rounds solve a depth coarser than the final solve and draw their batches
     /// from the spheres near the surface ([`Params::fine_rounds`]).
     pub(crate) fine_rounds: bool,
+    /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
+    /// clamped ones).
+    pub(crate) far_spheres: usize,
 }
 
 impl<'a> Plan<'a> {
@@ -106,7 +109,15 @@ impl<'a> Plan<'a> {
         };
         let owner_radius = unit.clamp.min(band);
         let spacing = Some(unit.spacing());
+        let far_spheres = if owner_radius < unit.clamp {
+            (unit.spheres.iter())
+                .filter(|s| s.radius >= owner_radius && s.radius < unit.clamp)
+                .count()
+        } else {
+            0
+        };
         Ok(Self {
+            far_spheres,
             feasible: params.feasible_params(unit.len(), owner_radius, unit.owner_scale()),
             round_spsr: params.round_spsr_params(spacing),
             final_spsr: params.spsr_params(spacing),
@@ -119,20 +130,6 @@ impl<'a> Plan<'a> {
             input,
             unit,
         })
-    }
-
-    /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
-    /// clamped ones).
-    pub(crate) fn far_spheres(&self) -> usize {
-        let (r, clamp) = (self.owner_radius, self.unit.clamp);
-        if r >= clamp {
-            return 0;
-        }
-        self.unit
-            .spheres
-            .iter()
-            .filter(|s| s.radius >= r && s.radius < clamp)
-            .count()
     }
 
     /// Tangency points in the caller's coordinates (an earlier run's) at the working scale.

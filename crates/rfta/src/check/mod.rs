@@ -59,13 +59,13 @@ pub struct Inspection {
     /// A clamping magnitude, if the values look clamped (see the module docs), with the number of
     /// plateau samples that show it.
     pub clamp: Option<(f64, usize)>,
-    /// The largest separation ratio short of `SEVERE_RATIO` (1.25) (1 when no pair exceeds 1): noise
-    /// that inflates values by a fraction `e` shows as a ratio up to `1 + e`.
+    /// The largest separation ratio short of `SEVERE_RATIO` (1.25) (1 when no pair exceeds 1):
+    /// noise that inflates values by a fraction `e` shows as a ratio up to `1 + e`.
     pub overlap: f64,
     /// On a grid, the largest `(|s_i - s_j| - d) / (|s_i| + |s_j|)` over neighbours `i`, `j` along
-    /// an axis (`d` apart), below `MAX_NOISE` (0.25) (0 when none is positive): a distance changes by at
-    /// most `d` over `d`, so relative noise of `e` shows as up to `e` where the gradient follows
-    /// the axis, far more often than across the surface.
+    /// an axis (`d` apart), below `MAX_NOISE` (0.25) (0 when none is positive): a distance changes
+    /// by at most `d` over `d`, so relative noise of `e` shows as up to `e` where the gradient
+    /// follows the axis, far more often than across the surface.
     pub lipschitz_excess: f64,
     /// The samples on the outside of the set (a grid's outer faces; otherwise the twentieth
     /// farthest from the centre of their box): `(negative, all)` of them, zeros left out.

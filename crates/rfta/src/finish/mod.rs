@@ -35,16 +35,16 @@ use rfta_repair::{
 };
 
 /// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
-/// margin at which the consistency check ([`crate::consistency`]) counts a sphere as entered, and large enough that the
-/// sphere tree prunes the many spheres the surface merely touches.
+/// margin at which the consistency check ([`crate::consistency`]) counts a sphere as entered, and
+/// large enough that the sphere tree prunes the many spheres the surface merely touches.
 pub(crate) const PUSH_DEPTH: f64 = 0.02;
 
-/// [`clear_spheres`](rfta_repair::clear_spheres) looks at spheres smaller than this many owner radii (`rfta::Params::owner_band`
-/// spacings on grids). A wider sphere tangent at the same point along the same normal enters a
-/// bulge at most by a few hundredths of a spacing more (a bulge `w` wide enters a sphere of
-/// radius `t` by about its height less `w^2 / 2t`): below the margin at which
-/// the consistency check ([`crate::consistency`]) counts an entry, where the many far spheres' queries would cost most
-/// (nine in ten of the 129^3 bunny's samples).
+/// [`clear_spheres`](rfta_repair::clear_spheres) looks at spheres smaller than this many owner
+/// radii (`rfta::Params::owner_band` spacings on grids). A wider sphere tangent at the same point
+/// along the same normal enters a bulge at most by a few hundredths of a spacing more (a bulge `w`
+/// wide enters a sphere of radius `t` by about its height less `w^2 / 2t`): below the margin at
+/// which the consistency check ([`crate::consistency`]) counts an entry, where the many far
+/// spheres' queries would cost most (nine in ten of the 129^3 bunny's samples).
 pub(crate) const CLEAR_BELOW: f64 = 3.0;
 
 /// The last solve on the final points (every sample a side point): its mesh at the working
@@ -60,8 +60,9 @@ pub(crate) fn final_solve(
 }
 
 /// The repair of the final solve's mesh ([`repair_once`]); then, unless
-/// [`crate::Params::keep_cavities`], the cavities the samples leave open opened ([`open_cavities`]),
-/// whose re-solve replaces `final_solve`'s side errors when its surface is kept.
+/// [`crate::Params::keep_cavities`], the cavities the samples leave open opened
+/// ([`open_cavities`]), whose re-solve replaces `final_solve`'s side errors when its surface is
+/// kept.
 pub(crate) fn repair(
     plan: &Plan<'_>,
     cloud: &TangentPoints,
@@ -107,7 +108,7 @@ fn solve_with(
     let n = unit.len();
     let mut owners = cloud.owners.clone();
     owners.dedup();
-    report.far_spheres = plan.far_spheres();
+    report.far_spheres = plan.far_spheres;
     report.spheres_without_point = n.saturating_sub(owners.len() + report.far_spheres);
     mesh.map_vertices(|v| unit.to_input(v));
     Ok((mesh, report))
@@ -180,10 +181,10 @@ fn open_cavities(
     Ok(best)
 }
 
-/// The cavities the re-solves closed again, joined to the surface beyond them by a tube through
-/// the wall along a grid edge of [`rfta_repair::cavity_openings`] ([`rfta_repair::tunnel_cavities`]),
-/// kept only if the mesh stays closed and manifold and puts no more samples on the wrong side
-/// nor enters more spheres.
+/// The cavities the re-solves closed again, joined to the surface beyond them by a tube through the
+/// wall along a grid edge of [`rfta_repair::cavity_openings`] ([`rfta_repair::tunnel_cavities`]),
+/// kept only if the mesh stays closed and manifold and puts no more samples on the wrong side nor
+/// enters more spheres.
 fn tunnel(samples: &SdfSamples, grid: &rfta_geom::Grid, unit: &UnitBox, best: &mut Opened) {
     let openings = rfta_repair::cavity_openings(&best.mesh, &unit.sphere_set(), grid);
     let paths: Vec<_> = openings
