@@ -277,6 +277,9 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
     for change in r.changes() {
         ui.detail(change);
     }
+    for answer in r.answers() {
+        ui.say(answer);
+    }
     ui.detail(r.agreement());
     if let Some(why) = &r.rounds.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));

@@ -63,15 +63,14 @@ impl Found {
 }
 
 /// The report's figures for a page (feature `samples`): [`figures`] of its serde form, with what
-/// the repair changed ([`rfta::Report::changes`]) after the warnings.
+/// the repair did ([`rfta::Report::answers`], [`rfta::Report::changes`]) after the warnings.
 #[cfg(feature = "samples")]
 pub fn report_figures(report: &rfta::Report) -> Vec<(String, String)> {
     let value = serde_json::to_value(report).unwrap_or_default();
     let mut out = figures(&value);
     let at = out.iter().take_while(|(k, _)| k != "all figures").count();
-    let changes = report
-        .changes()
-        .into_iter()
+    let changes = (report.answers().into_iter())
+        .chain(report.changes())
         .map(|c| ("repair".to_string(), c));
     out.splice(at..at, changes);
     out

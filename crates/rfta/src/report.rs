@@ -281,8 +281,8 @@ pub struct RepairReport {
 }
 
 impl Report {
-    /// What the final solve and the repair changed, one sentence each (nothing for a step that
-    /// changed nothing): the command line's verbose lines, the HTML page's.
+    /// What the final solve and the repair changed on their own, one sentence each (nothing for a
+    /// step that changed nothing): the command line's verbose lines, the HTML page's.
     pub fn changes(&self) -> Vec<String> {
         let (r, f) = (&self.repair, &self.final_solve);
         let mut out = Vec::new();
@@ -334,6 +334,15 @@ impl Report {
                 if r.cavities_opened == 1 { "y" } else { "ies" }
             ));
         }
+        out
+    }
+
+    /// What was done at the caller's request, one sentence each: the genus asked reached
+    /// ([`crate::Params::genus`]), the SDF asked about small components and thin handles (the
+    /// adaptive mode). A front end says these even when it is quiet about [`Report::changes`].
+    pub fn answers(&self) -> Vec<String> {
+        let r = &self.repair;
+        let mut out = Vec::new();
         if r.small_components_asked + r.thin_handles_asked > 0 {
             out.push(format!(
                 "asked the SDF about {} small component(s) and {} thin handle(s): removed {} and cut {} it contradicts",
@@ -529,5 +538,28 @@ mod tests {
         assert!(quiet.is_empty());
         // The monitor is woken when the work ends, not after its half-second nap.
         assert!(start.elapsed() < Duration::from_millis(400));
+    }
+
+    /// What the caller asked for is an answer a quiet front end still says; what the repair did
+    /// on its own is a change; a step that did nothing says nothing.
+    #[test]
+    fn answers_and_changes_are_apart() {
+        let report = Report {
+            repair: RepairReport {
+                components_joined: 1,
+                handles_cut: 2,
+                dents: 3,
+                ..RepairReport::default()
+            },
+            ..Report::default()
+        };
+        assert_eq!(
+            report.answers(),
+            ["to reach the genus asked: joined 1 component(s) to the largest, cut 2 handle(s)"]
+        );
+        let changes = report.changes();
+        assert_eq!(changes.len(), 1, "{changes:?}");
+        assert!(changes[0].starts_with("split 3 faces"), "{changes:?}");
+        assert!(Report::default().answers().is_empty() && Report::default().changes().is_empty());
     }
 }
