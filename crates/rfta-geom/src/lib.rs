@@ -36,6 +36,7 @@ pub use glam;
 
 mod aabb;
 mod analytic;
+mod cubic;
 mod error;
 pub mod feature_transform;
 pub mod kernels;
@@ -50,6 +51,7 @@ mod sphere;
 
 pub use aabb::Aabb;
 pub use analytic::Analytic;
+pub use cubic::CubicField;
 pub use error::Error;
 pub use mesh::TriMesh;
 pub use points::OrientedPoints;
