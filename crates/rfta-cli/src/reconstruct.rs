@@ -173,6 +173,25 @@ pub(crate) struct Tuning {
     #[arg(long, value_enum)]
     #[serde(skip_serializing_if = "Option::is_none")]
     initial: Option<Initial>,
+    /// How the samples are read: as distances (the paper's spheres), as a level set whose zero
+    /// set is the surface (grids: trained networks, CSG bounds, any field that is not a
+    /// distance), or, by default, as a level set when a grid's values fall short of their zero
+    /// set (the report's field figures say how far they reach).
+    #[arg(long, value_enum)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    field: Option<FieldArg>,
+}
+
+/// `--field`: `rfta::Field` by its serde names.
+#[derive(Debug, Clone, Copy, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub(crate) enum FieldArg {
+    /// Distances when they behave like them, else a level set.
+    Auto,
+    /// The paper's spheres.
+    Distance,
+    /// The field's zero set (grids).
+    LevelSet,
 }
 
 /// `--initial`: `rfta::InitialPoints` by its serde names.

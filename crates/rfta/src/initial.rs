@@ -29,9 +29,30 @@ pub(crate) fn initial_points(
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<(TangentPoints, InitialReport)> {
+    if plan.field.level_set {
+        return Ok(on_zero_set(plan, progress));
+    }
     let seeds = seeds.map(|s| feasible_seeds(plan, &plan.scaled(s)));
     // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
     drawing(plan, seeds, plan.raster_radius, journal, progress)
+}
+
+/// The initial points of samples read as a level set: on its zero set ([`crate::field`]).
+fn on_zero_set(
+    plan: &Plan<'_>,
+    progress: &mut (dyn FnMut(Stage) + Send),
+) -> (TangentPoints, InitialReport) {
+    progress(Stage::Initial);
+    let cloud = crate::field::zero_set_points(&plan.samples, &plan.unit);
+    let values = &plan.unit.values;
+    let negative = values.iter().filter(|&&v| v < 0.0).count();
+    let report = InitialReport {
+        negative,
+        non_negative: values.len() - negative,
+        feasible_initial: cloud.len(),
+        ..InitialReport::default()
+    };
+    (cloud, report)
 }
 
 /// The seeds (at the working scale) that can start this run, in the unit box: those whose

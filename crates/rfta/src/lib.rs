@@ -46,6 +46,7 @@
 pub mod adaptive;
 pub mod check;
 pub mod consistency;
+pub mod field;
 mod finish;
 mod initial;
 mod memory;
@@ -66,6 +67,7 @@ pub use rfta_sphere_tree as sphere_tree;
 pub use rfta_spsr as spsr;
 
 pub use consistency::{Consistency, Margins};
+pub use field::{Field, FieldReport};
 pub use memory::{available_memory, check_memory, estimate_peak_memory, format_bytes};
 pub(crate) use params::{CELLS_PER_SPACING, RASTER_REACH, SUB_CELL_LOOP};
 pub use params::{InitialPoints, PRESETS, Params, Seeds, screening_at, spsr_depth_for};
@@ -223,6 +225,7 @@ pub fn reconstruct_cancellable(
         let (mesh, repair) = finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
         let report = Report {
             input: plan.input.clone(),
+            field: plan.field.clone(),
             initial,
             rounds,
             final_solve,

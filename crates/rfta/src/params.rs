@@ -8,6 +8,7 @@ use rfta_geom::rng::hash;
 use rfta_spsr::SpsrParams;
 use serde::{Deserialize, Deserializer, Serialize};
 
+use crate::field::Field;
 use crate::{Error, Result};
 
 /// The most worker threads [`Params::threads`] may ask for.
@@ -104,6 +105,10 @@ pub struct Params {
     /// point each sample's gradient points to ([`InitialPoints::Gradient`]); the paper's
     /// rasterized empty space ([`InitialPoints::Raster`], always for scattered samples).
     pub initial: InitialPoints,
+    /// How the samples are read: as distances (the paper's spheres) or as a level set whose zero
+    /// set is the surface; by default ([`Field::Auto`]) a grid whose values fall short of their
+    /// zero set is read as a level set ([`crate::field`]).
+    pub field: Field,
 }
 
 /// The source of the initial tangency points ([`Params::initial`]).
@@ -146,6 +151,7 @@ impl Default for Params {
             genus: None,
             keep_cavities: false,
             initial: InitialPoints::Gradient,
+            field: Field::Auto,
         }
     }
 }

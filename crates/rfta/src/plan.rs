@@ -9,9 +9,10 @@ use rfta_feasible::TangentPoints;
 use rfta_geom::SdfSamples;
 use rfta_spsr::SpsrParams;
 
+use crate::field::{self, Field, FieldReport};
 use crate::normalize::{self, UnitBox};
 use crate::report::{InputReport, Journal};
-use crate::{Params, RASTER_REACH, Reconstruction, Result, Step, check};
+use crate::{Error, Params, RASTER_REACH, Reconstruction, Result, Step, Warning, check};
 
 /// `stages` run on the plan of `params` on `samples` (with the journal its input check began),
 /// on the pool of [`Params::threads`], once the parameters are valid and the memory the run
@@ -44,6 +45,9 @@ pub(crate) struct Plan<'a> {
     factor: Option<f64>,
     /// The input check's findings (the clamp used, the noise shrink of the radii).
     pub(crate) input: InputReport,
+    /// How the samples are read: as distances, or as a level set ([`crate::field`]), whose
+    /// initial points lie on the zero set and need no rounds ([`Params::rounds`] is 0).
+    pub(crate) field: FieldReport,
     /// The samples as spheres in the unit box.
     pub(crate) unit: UnitBox,
     /// Spheres at least this large own no tangency point (unit box): the clamp, or, on a grid,
@@ -77,7 +81,7 @@ impl<'a> Plan<'a> {
         params: &Params,
         journal: &mut Journal,
     ) -> Result<Self> {
-        let (samples, factor, params) = match normalize::working_scale(samples) {
+        let (samples, factor, mut params) = match normalize::working_scale(samples) {
             // Reconstructed at a scale of ordinary size, then scaled back (exactly: a power of
             // two).
             Some((scaled, factor)) => (
@@ -102,6 +106,20 @@ impl<'a> Plan<'a> {
                 ..InputReport::default()
             }
         };
+        if params.field == Field::LevelSet && samples.as_grid().is_none() {
+            return Err(Error::InvalidParams(
+                "field = level-set reads the samples as a level set on a grid; these are scattered (read them as distances: field = distance or auto)".into(),
+            ));
+        }
+        let t = std::time::Instant::now();
+        let field = field::measure(&samples, params.field, input.clamp);
+        journal.timed(Step::InputCheck, t);
+        if field.level_set {
+            params.rounds = 0;
+            if let (Field::Auto, Some(reach)) = (params.field, field.reach) {
+                journal.warnings.push(Warning::LevelSet { reach });
+            }
+        }
         let unit = UnitBox::new(&samples, input.clamp, input.radius_scale);
         let band = match params.owner_band {
             Some(k) if unit.on_grid() => k * unit.spacing(),
@@ -128,6 +146,7 @@ impl<'a> Plan<'a> {
             samples,
             factor,
             input,
+            field,
             unit,
         })
     }

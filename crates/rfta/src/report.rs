@@ -133,6 +133,8 @@ pub struct Report {
     /// The input check's.
     #[serde(flatten)]
     pub input: InputReport,
+    /// How the samples were read ([`crate::field`]).
+    pub field: crate::FieldReport,
     /// The initial points'.
     #[serde(flatten)]
     pub initial: InitialReport,

@@ -18,6 +18,12 @@ pub enum Warning {
         /// The relative noise, as a fraction.
         fraction: f64,
     },
+    /// The values fall short of the distance to their zero set (median `reach` of it, far from
+    /// it): not a distance; the mesh is the field's zero set ([`crate::Field::LevelSet`]).
+    LevelSet {
+        /// [`crate::FieldReport::reach`].
+        reach: f64,
+    },
     /// Flat plateaus of the values at magnitude `at` (`samples` on them): a clamp, detected.
     Clamped {
         /// The clamp.
@@ -103,6 +109,11 @@ impl fmt::Display for Warning {
                 f,
                 "the values look noisy, by up to {:.2}% of their magnitude (they change faster than a distance can, or overlap the other sign's): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
                 100.0 * fraction
+            ),
+            Self::LevelSet { reach } => write!(
+                f,
+                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (--field distance to read them as distances)",
+                100.0 * reach
             ),
             Self::Clamped { at, samples } => write!(
                 f,

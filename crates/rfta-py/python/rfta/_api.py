@@ -274,6 +274,7 @@ def reconstruct(
     genus: Optional[int] = None,
     keep_cavities: bool = False,
     initial: Optional[str] = None,
+    field: Optional[str] = None,
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
     verbose: bool = False,
@@ -313,6 +314,11 @@ def reconstruct(
         option (the CLI keeps the preset's), and ``threads`` (the global ``rfta --threads``).
         ``initial``: ``"gradient"`` (on grids, the default: the initial points from the samples'
         gradients) or ``"raster"`` (the paper's rasterized empty space).
+    field : "auto", "distance" or "level-set"
+        How the samples are read: as distances (the paper's spheres), as a level set whose zero
+        set is the surface (grids only: a trained network's values, a CSG bound, any field that
+        is not a distance), or, by default, as a level set when a grid's values fall short of
+        their zero set. ``report["field"]`` says how far they reach and how they were read.
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
     progress : callable(stage, done, of), optional
@@ -331,6 +337,8 @@ def reconstruct(
             raise ValueError("give either S (samples) or sdf (a function to ask), not both")
         if not callable(sdf):
             raise ValueError(f"sdf must be callable, not {type(sdf).__name__}")
+        if field is not None:
+            raise ValueError("field applies to samples on a grid, not to sdf (a function to ask)")
         budget = 30000 if budget is None else int(budget)
         lo, hi = _bounds(bounds)
         options = dict(
@@ -376,6 +384,7 @@ def reconstruct(
         genus=genus,
         keep_cavities=keep_cavities,
         initial=initial,
+        field=field,
         threads=threads,
     )
     V, F, P, N, report = _run(

@@ -384,7 +384,15 @@ fn measure(
             _ => {}
         }
     }
-    if !c.is_consistent() {
+    // A level set's values are not distances: a sphere the surface enters is no disagreement,
+    // nor is a sphere without a point.
+    let level_set = plan.field.level_set;
+    let disagrees = if level_set {
+        c.sign_errors > 0
+    } else {
+        !c.is_consistent()
+    };
+    if disagrees {
         journal.warnings.push(Warning::Disagrees {
             wrong_side: c.sign_errors,
             entered: c.entered,
@@ -406,7 +414,7 @@ fn measure(
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
     let eligible = n - report.final_solve.far_spheres;
-    if report.final_solve.spheres_without_point * 20 > eligible {
+    if report.final_solve.spheres_without_point * 20 > eligible && !level_set {
         journal.warnings.push(Warning::SpheresWithoutPoint {
             without: report.final_solve.spheres_without_point,
             eligible,

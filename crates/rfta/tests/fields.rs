@@ -1,0 +1,136 @@
+//! Fields that are not distances (`rfta::field`): a trained network's kind of field, whose values
+//! flatten away from the surface and whose slope near it is not one, is read as a level set and
+//! meshed at its zero set; an exact distance is read as one; the reading can be forced.
+
+use rfta::geom::glam::DVec3;
+use rfta::geom::{Grid, SdfSamples, TriMesh};
+use rfta::{Error, Field, Params, Warning, reconstruct};
+use rfta_testkit::Analytic;
+
+const TORUS: Analytic = Analytic::Torus {
+    major: 0.55,
+    minor: 0.22,
+};
+
+/// `(n + 1)^3` samples over [-1, 1]^3 of `value(p, d)`, `d` the torus' signed distance at `p`.
+fn torus_grid(n: usize, value: impl Fn(DVec3, f64) -> f64) -> (Grid, Vec<f64>) {
+    let grid = Grid::cube(n, -1.0, 1.0).expect("grid");
+    let values = (0..grid.len())
+        .map(|i| value(grid.position(i), TORUS.sdf(grid.position(i))))
+        .collect();
+    (grid, values)
+}
+
+/// What a network fitted to the torus' distance clamped at 0.1 looks like: the same zero set,
+/// values flat at 0.1 far from it, a slope between 0.7 and 1.3 near it (varying over the box).
+fn network_like(p: DVec3, d: f64) -> f64 {
+    0.1 * (d / 0.1).tanh() * (1.0 + 0.3 * (3.0 * p.x + 2.0 * p.z).sin())
+}
+
+/// Mean and largest distance from the torus of the mesh's vertices and its faces' centroids
+/// (where flat faces cut the curved surface's corners).
+fn surface_error(mesh: &TriMesh) -> (f64, f64) {
+    let centroids = mesh
+        .faces
+        .iter()
+        .map(|f| f.iter().map(|&v| mesh.vertices[v as usize]).sum::<DVec3>() / 3.0);
+    let d: Vec<f64> = (mesh.vertices.iter().copied().chain(centroids))
+        .map(|v| TORUS.sdf(v).abs())
+        .collect();
+    let max = d.iter().copied().fold(0.0, f64::max);
+    (d.iter().sum::<f64>() / d.len() as f64, max)
+}
+
+#[test]
+fn a_network_like_field_is_meshed_at_its_zero_set_better_than_marching_cubes() {
+    let (grid, values) = torus_grid(32, network_like);
+    let samples = SdfSamples::grid(grid, values.clone()).expect("samples");
+    let out = reconstruct(&samples, &Params::default()).expect("reconstruct");
+    let r = &out.report;
+    assert!(r.field.level_set, "{:?}", r.field);
+    let reach = r.field.reach.expect("a reach");
+    assert!(reach < 0.5, "{reach}");
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| matches!(w, Warning::LevelSet { .. }))
+    );
+    // No fine-tuning: the spheres do not touch the zero set.
+    assert!(r.rounds.points_per_round.len() <= 1, "{:?}", r.rounds);
+    assert_eq!((r.mesh.components, r.mesh.genus), (1, Some(1)));
+    assert!(r.mesh.watertight);
+    assert_eq!(r.consistency.sign_errors, 0);
+    // Marching cubes' flat faces, one per cell, cut the curved surface's corners; the zero set
+    // of the smooth interpolant, meshed finer, is far closer (h = 0.0625).
+    let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
+    let (mean, max) = surface_error(&out.mesh);
+    let (mc_mean, mc_max) = surface_error(&mc);
+    assert!(max < 0.1 * 0.0625, "largest error {max}");
+    assert!(
+        mean < 0.5 * mc_mean,
+        "mean error {mean} against marching cubes' {mc_mean}"
+    );
+    assert!(max < mc_max, "{max} against {mc_max}");
+}
+
+#[test]
+fn exact_distances_are_read_as_distances_and_the_reading_can_be_forced() {
+    let (grid, values) = torus_grid(32, |_, d| d);
+    let samples = SdfSamples::grid(grid, values).expect("samples");
+    let params = Params {
+        rounds: 2,
+        ..Params::default()
+    };
+    let out = reconstruct(&samples, &params).expect("reconstruct");
+    let f = &out.report.field;
+    assert!(!f.level_set);
+    assert!((0.9..=1.1).contains(&f.reach.expect("a reach")), "{f:?}");
+    assert_eq!(f.short, 0.0);
+    assert_eq!(out.report.rounds.points_per_round.len(), 3);
+    let forced = Params {
+        field: Field::LevelSet,
+        ..params.clone()
+    };
+    let out = reconstruct(&samples, &forced).expect("reconstruct");
+    assert!(out.report.field.level_set);
+    // Forced, the zero set of an exact distance is the torus all the same.
+    assert!(surface_error(&out.mesh).1 < 0.1 * 0.0625);
+    assert!(
+        !out.report
+            .warnings
+            .iter()
+            .any(|w| matches!(w, Warning::LevelSet { .. }))
+    );
+
+    // Read as distances (small: the spheres' tangency points float in the flat far field, and
+    // the run is slow and poor, as before the level-set reading).
+    let (grid, values) = torus_grid(16, network_like);
+    let samples = SdfSamples::grid(grid, values).expect("samples");
+    let distance = Params {
+        field: Field::Distance,
+        ..params
+    };
+    let out = reconstruct(&samples, &distance).expect("reconstruct");
+    assert!(!out.report.field.level_set);
+    assert!(out.report.field.reach.expect("a reach") < 0.5);
+}
+
+#[test]
+fn scattered_samples_cannot_be_read_as_a_level_set() {
+    let positions: Vec<DVec3> = (0..200)
+        .map(|i| {
+            let t = i as f64 * 0.618_034;
+            DVec3::new(t.sin(), (2.0 * t).cos(), (3.0 * t).sin()) * 0.9
+        })
+        .collect();
+    let values = positions.iter().map(|&p| TORUS.sdf(p)).collect();
+    let samples = SdfSamples::scattered(positions, values).expect("samples");
+    let params = Params {
+        field: Field::LevelSet,
+        ..Params::default()
+    };
+    match reconstruct(&samples, &params) {
+        Err(Error::InvalidParams(m)) => assert!(m.contains("level-set"), "{m}"),
+        other => panic!("{:?}", other.map(|r| r.report.field)),
+    }
+}
