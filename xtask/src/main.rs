@@ -2,7 +2,7 @@
 //!
 //! - `ci`: everything CI checks, in order, with a summary of each step's time at the end: fmt,
 //!   clippy, tests, docs, the Python package's tests, the Slurm job array, the browser demo,
-//!   shaders, tidy, a quick eval, the 2D eval and quick scenarios.
+//!   shaders, tidy, a quick eval, the inexact fields' quick eval, the 2D eval and quick scenarios.
 //! - `shaders`: parse and validate every `shaders/*.wgsl` with naga.
 //! - `slurm`: docs/batch.md's job-array script on a real one-node Slurm cluster (see [`slurm`]).
 //! - `tidy`: repository rules (see [`tidy`]).
@@ -34,7 +34,7 @@ commands:
   ci        everything CI checks, as .ci/run runs it: fmt --check, clippy -D warnings, tests,
             docs -D warnings, python (the package in a fresh venv, gpytoolbox's own tests against
             the drop-in, pytest, the adaptive example), slurm, web --check, shaders, tidy, a quick
-            eval, the 2D eval, quick scenarios; then each step's time, skipped steps named
+            eval, the inexact fields' quick eval, the 2D eval, quick scenarios; then each step's time, skipped steps named
   shaders   validate every shaders/*.wgsl with naga
   web       [--out DIR] [--check]: the browser demo as one page, <out>/index.html (default
             <target>/web); --check opens it in headless Chromium
@@ -300,6 +300,10 @@ fn ci(root: &Path) -> Result<()> {
                     &eval_dir("ci-quick"),
                 ])
             }),
+        ),
+        (
+            "eval inexact --quick",
+            Box::new(|| eval(&["inexact", "--quick", "--out", &eval_dir("ci-inexact")])),
         ),
         (
             "eval plane --res 16,32",

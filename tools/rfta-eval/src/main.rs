@@ -9,6 +9,7 @@
 //! - `plane`: the 2D pipeline against marching squares ([`plane`]);
 //! - `vdb`: rfta against OpenVDB's `volumeToMesh` on OpenVDB level sets ([`vdb`]);
 //! - `adaptive`: reconstruction from an SDF that can be asked, under budgets ([`adaptive`]);
+//! - `inexact`: fields that are not distances, trained networks and CSG ([`inexact`]);
 //! - `bench spsr | e2e`: our screened Poisson against PoissonRecon, and the whole reconstruction
 //!   against marching cubes and gpytoolbox ([`mod@bench`]).
 //!
@@ -25,6 +26,7 @@
 mod adaptive;
 mod bench;
 mod chart;
+mod inexact;
 mod method;
 mod mise;
 mod plane;
@@ -69,6 +71,9 @@ enum Mode {
     Vdb(vdb::Args),
     /// Reconstruction from each shape's exact SDF under budgets, against grids of as many points.
     Adaptive(adaptive::Args),
+    /// Fields that are not distances (trained networks, CSG): rfta against marching cubes,
+    /// scored against each field's zero set.
+    Inexact(inexact::Args),
     /// Benchmarks, each run in a child process of its own.
     #[command(subcommand)]
     Bench(bench::Bench),
@@ -89,6 +94,7 @@ fn main() -> Result<()> {
         Some(Mode::Plane(a)) => plane::command(a),
         Some(Mode::Vdb(a)) => vdb::command(a),
         Some(Mode::Adaptive(a)) => adaptive::command(a),
+        Some(Mode::Inexact(a)) => inexact::command(a),
         Some(Mode::Bench(b)) => bench::run(b),
         Some(Mode::BenchChild { args }) => bench::child_main(args),
     }
