@@ -24,8 +24,6 @@ use rfta_feasible::TangentPoints;
 use rfta_geom::{CubicField, SdfSamples};
 use serde::{Deserialize, Serialize};
 
-use crate::normalize::UnitBox;
-
 /// How the samples are read ([`crate::Params::field`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -139,9 +137,11 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
 }
 
 /// One point per sample within `BAND` spacings of the zero set (by value, or next to a sign
-/// change): Newton's method from the sample on the grid's tricubic interpolant, the unit gradient
-/// there its normal, the sample its owner; in the unit box. Empty for scattered samples.
-pub(crate) fn zero_set_points(samples: &SdfSamples, unit: &UnitBox) -> TangentPoints {
+/// change), of those `asked` marks when given (the others' values are interpolated: an adaptive
+/// run's): Newton's method from the sample on the grid's tricubic interpolant, the unit gradient
+/// there its normal, the sample its owner; in the samples' coordinates. Empty for scattered
+/// samples.
+pub(crate) fn zero_set_points(samples: &SdfSamples, asked: Option<&[bool]>) -> TangentPoints {
     let Some(grid) = samples.as_grid() else {
         return TangentPoints::default();
     };
@@ -153,10 +153,10 @@ pub(crate) fn zero_set_points(samples: &SdfSamples, unit: &UnitBox) -> TangentPo
     let marked = next_to_sign_change(samples);
     let found: Vec<_> = (0..values.len())
         .into_par_iter()
-        .filter(|&i| marked[i] || values[i].abs() < BAND * h)
+        .filter(|&i| asked.is_none_or(|a| a[i]) && (marked[i] || values[i].abs() < BAND * h))
         .filter_map(|i| {
             let (q, normal) = field.zero_near(grid.position(i), REACH * h)?;
-            Some((unit.to_unit(q), normal, i as u32))
+            Some((q, normal, i as u32))
         })
         .collect();
     let mut cloud = TangentPoints::default();
@@ -287,12 +287,10 @@ mod tests {
     #[test]
     fn zero_set_points_lie_on_the_zero_set() {
         let samples = sphere_grid(24, |d| 0.5 * d);
-        let unit = UnitBox::new(&samples, None, None);
-        let cloud = zero_set_points(&samples, &unit);
+        let cloud = zero_set_points(&samples, None);
         let h = 2.0 / 24.0;
         assert!(cloud.len() > 500, "{}", cloud.len());
-        for (p, n) in cloud.points.iter().zip(&cloud.normals) {
-            let q = unit.frame().to_mesh(*p);
+        for (&q, n) in cloud.points.iter().zip(&cloud.normals) {
             assert!((q.length() - 0.5).abs() < 0.01 * h, "{q}");
             assert!(n.dot(q.normalize()) > 0.999);
         }

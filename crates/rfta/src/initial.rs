@@ -30,20 +30,28 @@ pub(crate) fn initial_points(
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<(TangentPoints, InitialReport)> {
     if plan.field.level_set {
-        return Ok(on_zero_set(plan, progress));
+        return Ok(on_zero_set(plan, seeds, progress));
     }
     let seeds = seeds.map(|s| feasible_seeds(plan, &plan.scaled(s)));
     // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
     drawing(plan, seeds, plan.raster_radius, journal, progress)
 }
 
-/// The initial points of samples read as a level set: on its zero set ([`crate::field`]).
+/// The initial points of samples read as a level set: on its zero set ([`crate::field`]), or
+/// `seeds` (points on it an adaptive run put there, in the caller's coordinates).
 fn on_zero_set(
     plan: &Plan<'_>,
+    seeds: Option<&TangentPoints>,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> (TangentPoints, InitialReport) {
     progress(Stage::Initial);
-    let cloud = crate::field::zero_set_points(&plan.samples, &plan.unit);
+    let mut cloud = match seeds {
+        Some(seeds) => plan.scaled(seeds),
+        None => crate::field::zero_set_points(&plan.samples, None),
+    };
+    for p in &mut cloud.points {
+        *p = plan.unit.to_unit(*p);
+    }
     let values = &plan.unit.values;
     let negative = values.iter().filter(|&&v| v < 0.0).count();
     let report = InitialReport {

@@ -213,12 +213,24 @@ pub fn reconstruct_cancellable(
     progress: &mut (dyn FnMut(Stage) + Send),
     cancel: &AtomicBool,
 ) -> Result<Reconstruction> {
+    run(samples, params, None, progress, cancel)
+}
+
+/// [`reconstruct_cancellable`] with its initial points started from `seeds` (an adaptive run's,
+/// in the caller's coordinates).
+pub(crate) fn run(
+    samples: &SdfSamples,
+    params: &Params,
+    seeds: Option<&feasible::TangentPoints>,
+    progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
+) -> Result<Reconstruction> {
     let go_on = || go_on(cancel);
     // Each stage takes the values the one before returned and gives back its own report; the
     // warnings and the timings go to the journal, in order; the verdict reads them all.
     plan::with_plan(samples, params, |plan, mut journal| {
         go_on()?;
-        let (cloud, initial) = initial::initial_points(&plan, None, &mut journal, progress)?;
+        let (cloud, initial) = initial::initial_points(&plan, seeds, &mut journal, progress)?;
         let (cloud, rounds) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
         go_on()?;
         let (mesh, mut final_solve) = finish::final_solve(&plan, &cloud, &mut journal, progress)?;

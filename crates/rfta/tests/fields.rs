@@ -134,3 +134,61 @@ fn scattered_samples_cannot_be_read_as_a_level_set() {
         other => panic!("{:?}", other.map(|r| r.report.field)),
     }
 }
+
+/// The network-like torus as a function to ask: the base grid reads as a level set, the
+/// function is refined where its sign changes, and the finest grid's zero set is closer to the
+/// torus than marching cubes on a grid of as many evaluations, in one piece of genus 1, within
+/// the budget.
+#[test]
+fn a_network_like_function_is_refined_by_sign_within_its_budget() {
+    use std::sync::atomic::AtomicBool;
+
+    use rfta::adaptive::{Budget, OracleError, reconstruct_adaptive};
+    use rfta::geom::Aabb;
+
+    let budget = 20_000;
+    let mut oracle = |p: &[DVec3]| -> Result<Vec<f64>, OracleError> {
+        Ok(p.iter().map(|&q| network_like(q, TORUS.sdf(q))).collect())
+    };
+    let out = reconstruct_adaptive(
+        &mut oracle,
+        Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+        Budget::evaluations(budget),
+        &Params::default(),
+        &mut |_| {},
+        &mut |_| {},
+        &AtomicBool::new(false),
+    )
+    .expect("adaptive");
+    let r = &out.reconstruction.report;
+    assert!(r.field.level_set, "{:?}", r.field);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| matches!(w, Warning::LevelSet { .. }))
+    );
+    assert!(
+        out.report.evaluations <= budget,
+        "{}",
+        out.report.evaluations
+    );
+    assert_eq!(out.samples.len(), out.report.evaluations);
+    // Two levels below the base grid's 13 cells: a spacing of 2 / 52.
+    assert!(
+        out.report.finest_spacing <= 2.0 / 52.0 + 1e-12,
+        "{}",
+        out.report.finest_spacing
+    );
+    assert!(out.report.passes.len() >= 3, "{:?}", out.report.passes);
+    assert_eq!((r.mesh.components, r.mesh.genus), (1, Some(1)));
+    assert!(r.mesh.watertight);
+    // Marching cubes on the densest grid the budget buys (27^3 = 19,683 points).
+    let (grid, values) = torus_grid(26, network_like);
+    let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
+    let (mean, _) = surface_error(&out.reconstruction.mesh);
+    let (mc_mean, _) = surface_error(&mc);
+    assert!(
+        mean < 0.5 * mc_mean,
+        "{mean} against marching cubes' {mc_mean}"
+    );
+}

@@ -101,7 +101,7 @@ fn main() -> Result<()> {
 }
 
 /// The repository root.
-fn workspace_root() -> PathBuf {
+pub(crate) fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .ancestors()
         .nth(2)

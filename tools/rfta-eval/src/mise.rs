@@ -74,29 +74,49 @@ impl Mise {
     /// # Errors
     /// When the runner fails or its answer cannot be read.
     pub(crate) fn run(&self, mesh: &Path, out: &Path) -> Result<MiseRun> {
-        let output = Command::new(&self.python)
+        let mut command = Command::new(&self.python);
+        command
             .arg(&self.script)
             .arg(mesh)
             .arg(out)
-            .args(["--r0", "16", "--depth", "3"])
-            .output()
-            .with_context(|| format!("cannot run {}", self.python.display()))?;
-        if !output.status.success() {
-            bail!(
-                "MISE on {} failed: {}",
-                mesh.display(),
-                String::from_utf8_lossy(&output.stderr)
-            );
-        }
-        let text = String::from_utf8_lossy(&output.stdout);
-        let (evaluations, seconds, oracle_seconds) = parse(&text)?;
-        Ok(MiseRun {
-            evaluations,
-            seconds,
-            oracle_seconds,
-            mesh: rfta_io::read_mesh(out)?,
-        })
+            .args(["--r0", "16", "--depth", "3"]);
+        answer(command, mesh, out)
     }
+
+    /// MISE to 128^3 over [-1, 1]^3 on the inexact evaluation's network at `net`
+    /// (`tools/rfta-eval/inexact/mise_network.py`, the same settings); its mesh is written to
+    /// `out`.
+    ///
+    /// # Errors
+    /// When the runner fails or its answer cannot be read.
+    pub(crate) fn run_network(&self, net: &Path, out: &Path) -> Result<MiseRun> {
+        let script = crate::workspace_root().join("tools/rfta-eval/inexact/mise_network.py");
+        let mut command = Command::new(&self.python);
+        command.arg(script).arg(net).arg(out);
+        answer(command, net, out)
+    }
+}
+
+/// What `command`, a MISE runner on `input` writing `out`, answered.
+fn answer(mut command: Command, input: &Path, out: &Path) -> Result<MiseRun> {
+    let output = command
+        .output()
+        .with_context(|| format!("cannot run {command:?}"))?;
+    if !output.status.success() {
+        bail!(
+            "MISE on {} failed: {}",
+            input.display(),
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    let text = String::from_utf8_lossy(&output.stdout);
+    let (evaluations, seconds, oracle_seconds) = parse(&text)?;
+    Ok(MiseRun {
+        evaluations,
+        seconds,
+        oracle_seconds,
+        mesh: rfta_io::read_mesh(out)?,
+    })
 }
 
 /// `(evaluations, seconds outside the oracle, seconds in it)` from the runner's JSON line (its

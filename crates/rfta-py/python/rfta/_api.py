@@ -319,6 +319,8 @@ def reconstruct(
         set is the surface (grids only: a trained network's values, a CSG bound, any field that
         is not a distance), or, by default, as a level set when a grid's values fall short of
         their zero set. ``report["field"]`` says how far they reach and how they were read.
+        With ``sdf``, the base grid decides: a level set is refined where its sign changes
+        (as MISE does) and its finest grid read as one.
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
     progress : callable(stage, done, of), optional
@@ -337,8 +339,6 @@ def reconstruct(
             raise ValueError("give either S (samples) or sdf (a function to ask), not both")
         if not callable(sdf):
             raise ValueError(f"sdf must be callable, not {type(sdf).__name__}")
-        if field is not None:
-            raise ValueError("field applies to samples on a grid, not to sdf (a function to ask)")
         budget = 30000 if budget is None else int(budget)
         lo, hi = _bounds(bounds)
         options = dict(
@@ -346,7 +346,7 @@ def reconstruct(
             clamp=clamp, check=check, depth=depth, screening=screening,
             owner_band=owner_band, raster_resolution=raster_resolution,
             min_island=min_island, genus=genus, keep_cavities=keep_cavities,
-            initial=initial, threads=threads,
+            initial=initial, field=field, threads=threads,
         )
         V, F, P, N, report, adaptive, positions, values = _rfta.reconstruct_adaptive(
             _host(sdf), lo, hi, budget, preset=preset, options=options,

@@ -83,6 +83,8 @@ pub(crate) struct Lattice {
     index: HashMap<[u32; 3], u32>,
     /// The leaves, in a deterministic order (sorted after each refinement).
     leaves: Vec<Cell>,
+    /// The base grid's cells per axis.
+    base: [u32; 3],
 }
 
 impl Lattice {
@@ -117,7 +119,21 @@ impl Lattice {
             values: Vec::new(),
             index: HashMap::new(),
             leaves,
+            base: per_axis,
         }
+    }
+
+    /// The base grid and its values (`NAN` where not asked for yet).
+    pub(crate) fn base_grid(&self) -> rfta_geom::Result<(rfta_geom::Grid, Vec<f64>)> {
+        let dims = self.base.map(|c| c as usize + 1);
+        let grid = rfta_geom::Grid::new(dims, self.origin, self.step * f64::from(1u32 << FINEST))?;
+        let values = (0..grid.len())
+            .map(|i| {
+                let key = grid.ijk(i).map(|c| (c as u32) << FINEST);
+                self.value(key).unwrap_or(f64::NAN)
+            })
+            .collect();
+        Ok((grid, values))
     }
 
     /// Position of a lattice point.

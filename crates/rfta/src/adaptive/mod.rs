@@ -30,6 +30,7 @@
 //! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
 
 mod lattice;
+mod level_set;
 mod settle;
 
 use std::sync::atomic::AtomicBool;
@@ -185,6 +186,24 @@ pub fn reconstruct_adaptive(
         )));
     }
     asker.ask(&mut lattice, &corners)?;
+    // A function whose values fall short of its zero set is refined by sign and read as a level
+    // set (`level_set.rs`); the base grid says which.
+    if params.field != crate::Field::Distance {
+        let (grid, values) = lattice.base_grid()?;
+        let base = SdfSamples::grid(grid, values)?;
+        let field = crate::field::measure(&base, params.field, params.clamp);
+        if field.level_set {
+            return level_set::refine_and_read(
+                base,
+                field,
+                &mut asker,
+                budget.evaluations,
+                params,
+                progress,
+                on_pass,
+            );
+        }
+    }
     let guide = Params {
         rounds: params.rounds.min(GUIDE_ROUNDS),
         ..params.clone()

@@ -303,14 +303,17 @@ fn repair_once(
     let h = samples.spacing();
     report.dents = dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
     let before = mesh.vertices.clone();
-    let spheres = unit.sphere_set();
-    push_out_of_spheres(&mut mesh, &spheres, &near, PUSH_DEPTH * unit.spacing());
-    report.vertices_added = clear_spheres(
-        &mut mesh,
-        &spheres,
-        CLEAR_BELOW * r_own,
-        PUSH_DEPTH * unit.spacing(),
-    );
+    // A level set's values are not distances: its spheres guarantee no empty space.
+    if !plan.field.level_set {
+        let spheres = unit.sphere_set();
+        push_out_of_spheres(&mut mesh, &spheres, &near, PUSH_DEPTH * unit.spacing());
+        report.vertices_added = clear_spheres(
+            &mut mesh,
+            &spheres,
+            CLEAR_BELOW * r_own,
+            PUSH_DEPTH * unit.spacing(),
+        );
+    }
     report.vertices_pushed_out = before
         .iter()
         .zip(&mesh.vertices)

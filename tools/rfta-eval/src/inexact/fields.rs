@@ -36,6 +36,8 @@ type Eval = Box<dyn Fn(&[DVec3]) -> Vec<f64> + Sync>;
 pub(crate) struct Field {
     pub(crate) name: String,
     pub(crate) kind: Kind,
+    /// A network's weights.
+    pub(crate) path: Option<std::path::PathBuf>,
     eval: Eval,
 }
 
@@ -83,10 +85,12 @@ pub(crate) fn networks(dir: &Path, only: &[String]) -> Result<Vec<Field>> {
     names
         .into_iter()
         .map(|name| {
-            let net = Mlp::load(&dir.join(format!("{name}.npy")))?;
+            let path = dir.join(format!("{name}.npy"));
+            let net = Mlp::load(&path)?;
             Ok(Field {
                 name: format!("network-{name}"),
                 kind: Kind::Network,
+                path: Some(path),
                 eval: Box::new(move |p| net.values(p)),
             })
         })
@@ -173,6 +177,7 @@ pub(crate) fn csg(only: &[String]) -> Vec<Field> {
         .map(|&(name, f)| Field {
             name: name.into(),
             kind: Kind::Csg,
+            path: None,
             eval: Box::new(move |p| p.iter().map(|&q| f(q)).collect()),
         })
         .collect()
@@ -267,6 +272,7 @@ mod tests {
         let f = Field {
             name: "flat sphere".into(),
             kind: Kind::Network,
+            path: None,
             eval: Box::new(|p| {
                 p.iter()
                     .map(|q| 0.05 * ((q.length() - 0.5 + 0.1 * q.x * q.y) / 0.05).tanh())

@@ -9,13 +9,17 @@
 //! it reads the values as it judges them, [`rfta::FieldReport`]) mesh the grid; for CSG the
 //! other reading is run too (`rfta-distance` or `rfta-level-set`). The reference is the field's
 //! zero set by marching cubes at `--reference-res` cells per axis, evaluated where the zero set
-//! passes. Chamfer as the evaluation's (`rfta_metrics::chamfer`).
+//! passes. Chamfer as the evaluation's (`rfta_metrics::chamfer`). Each network is also asked as
+//! a function ([`callable`]): rfta's adaptive mode against MISE (`--mise VENV` or
+//! `$RFTA_MISE_VENV`) at MISE's evaluations.
 //!
-//! Output: `<out>/results.csv` and `<out>/report.md`. The run fails when a goal is missed
+//! Output: `<out>/results.csv`, `<out>/report.md` and each field's reference mesh
+//! (`<out>/FIELD-reference.ply`). The run fails when a goal is missed
 //! ([`goals`]): on networks, rfta's default above marching cubes' Chamfer or in more pieces; on
 //! any field, a reading above marching cubes' Chamfer, or a sample on the wrong side; on CSG, the
-//! level-set reading in more pieces.
+//! level-set reading in more pieces; as a function, rfta above MISE's Chamfer or in more pieces.
 
+mod callable;
 mod fields;
 mod mlp;
 
@@ -49,6 +53,10 @@ pub(crate) struct Args {
     /// points per surface.
     #[arg(long)]
     quick: bool,
+    /// A venv where MISE imports (`bash ../shared/peer-tests/mise/build.sh VENV`; default
+    /// `$RFTA_MISE_VENV`): MISE beside rfta on each network as a function to ask.
+    #[arg(long, value_name = "VENV")]
+    mise: Option<PathBuf>,
     #[command(flatten)]
     scoring: crate::table::Scoring,
     /// The run's folder (default: `<target>/eval/inexact`).
@@ -109,10 +117,16 @@ pub(crate) fn command(a: &Args) -> Result<()> {
         "no field to evaluate (networks in {})",
         dir.display()
     );
+    let mise = crate::mise::Mise::find(a.mise.as_deref())?;
     let mut rows = Vec::new();
+    let mut callable_rows = Vec::new();
     for field in &all {
         let t = Instant::now();
         let reference = field.reference(reference_res)?;
+        rfta_io::write_mesh(
+            &out.join(format!("{}-reference.ply", field.name)),
+            &reference,
+        )?;
         eprintln!(
             "{}: reference at {reference_res}^3, {} faces, {:.1} s",
             field.name,
@@ -122,18 +136,28 @@ pub(crate) fn command(a: &Args) -> Result<()> {
         for &n in &res {
             rows.extend(compare(field, n, &reference, samples)?);
         }
+        if field.kind == Kind::Network {
+            callable_rows.extend(callable::compare(
+                field,
+                &reference,
+                samples,
+                mise.as_ref(),
+                &out,
+            )?);
+        }
     }
     write_csv(&out.join("results.csv"), &rows)?;
-    let md = markdown(&rows, &res, reference_res, samples);
+    let md = markdown(&rows, &res, reference_res, samples)
+        + &callable::markdown(&callable_rows, mise.is_some());
     std::fs::write(out.join("report.md"), &md)?;
     println!("{md}");
     println!("wrote {}", out.display());
-    goals(&rows)
+    goals(&rows, callable::missed(&callable_rows))
 }
 
-/// The goals the run holds rfta to (the module docs), each miss named.
-fn goals(rows: &[Row]) -> Result<()> {
-    let mut missed = Vec::new();
+/// The goals the run holds rfta to (the module docs), each miss named, after those `missed` on
+/// the networks as functions.
+fn goals(rows: &[Row], mut missed: Vec<String>) -> Result<()> {
     for r in rows.iter().filter(|r| r.method != "mc") {
         let mc = rows
             .iter()
