@@ -118,6 +118,10 @@ pub(super) fn refine_and_read(
     };
     let points = crate::field::zero_set_points(&samples, Some(&known));
     let mut reconstruction = crate::run(&samples, &read, Some(&points), progress, asker.cancel)?;
+    let (positions, asked_values): (Vec<DVec3>, Vec<f64>) = asked.into_iter().unzip();
+    let asked =
+        SdfSamples::scattered(positions, asked_values)?.with_spacing(report.finest_spacing)?;
+    agree_with_asked(&mut reconstruction, &asked)?;
     if let (Field::Auto, Some(reach)) = (params.field, field.reach) {
         (reconstruction.report.warnings).insert(0, crate::Warning::LevelSet { reach });
     }
@@ -132,12 +136,35 @@ pub(super) fn refine_and_read(
     report.evaluations = asked.len();
     report.oracle_seconds = asker.seconds;
     report.rfta_seconds = report.passes.iter().map(|p| p.rfta_seconds).sum();
-    let (positions, values): (Vec<DVec3>, Vec<f64>) = asked.into_iter().unzip();
     Ok(AdaptiveReconstruction {
         reconstruction,
-        samples: SdfSamples::scattered(positions, values)?.with_spacing(report.finest_spacing)?,
+        samples: asked,
         report,
     })
+}
+
+/// The reconstruction's agreement measured against the samples asked for, not the finest grid's
+/// interpolated values: its sign errors and the warning about them.
+fn agree_with_asked(reconstruction: &mut crate::Reconstruction, asked: &SdfSamples) -> Result<()> {
+    let mesh = &reconstruction.mesh;
+    let topology = rfta_mesh::Topology::of(mesh);
+    let c = crate::consistency::measure_with(asked, mesh, &topology, None)?;
+    let report = &mut reconstruction.report;
+    report.consistency = crate::Consistency {
+        thin_loops: std::mem::take(&mut report.consistency.thin_loops),
+        ..c
+    };
+    report
+        .warnings
+        .retain(|w| !matches!(w, crate::Warning::Disagrees { .. }));
+    if report.consistency.sign_errors > 0 {
+        report.warnings.push(crate::Warning::Disagrees {
+            wrong_side: report.consistency.sign_errors,
+            entered: report.consistency.entered,
+            deepest: report.consistency.deepest_entry,
+        });
+    }
+    Ok(())
 }
 
 /// `grid` with its spacing halved over the same box.
