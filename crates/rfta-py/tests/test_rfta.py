@@ -428,6 +428,36 @@ def test_initial_points_from_the_gradients_or_the_raster():
         rfta.reconstruct(S, preset="fast", initial="teapot")
 
 
+def test_a_field_that_is_not_a_distance_is_read_as_a_level_set():
+    # A torus' distance flattened at 0.1 (as a network trained on a clamp answers), its slope
+    # near the surface off by up to 30%: the same zero set, values that fall short of it.
+    def flat(p):
+        return 0.1 * np.tanh(torus_sdf(p) / 0.1) * (1.0 + 0.3 * np.sin(3.0 * p[..., 0]))
+
+    with pytest.warns(rfta.RftaWarning, match="not distances"):
+        r = rfta.reconstruct(flat(grid(24)))
+    f = r.report["field"]
+    assert f["level_set"] and f["reach"] < 0.5, f
+    assert r.report["components"] == 1 and r.report["genus"] == 1
+    # Its vertices on the torus within a tenth of a spacing (2 / 24).
+    assert np.abs(torus_sdf(r.vertices)).max() < 0.1 * 2.0 / 24.0
+    assert not rfta.reconstruct(torus_sdf(grid(16)), preset="fast").report["field"]["level_set"]
+    forced = rfta.reconstruct(torus_sdf(grid(16)), field="level-set")
+    assert forced.report["field"]["level_set"]
+    with pytest.raises(ValueError, match="field"):
+        rfta.reconstruct(torus_sdf(grid(12)), field="occupancy")
+    # As a function to ask: refined where its sign changes, within the budget.
+    asked = []
+
+    def counted(p):
+        asked.append(len(p))
+        return flat(p)
+
+    r = rfta.reconstruct(sdf=counted, bounds=(-1, 1), budget=8000)
+    assert sum(asked) <= 8000 and r.report["field"]["level_set"]
+    assert r.report["components"] == 1 and r.report["genus"] == 1
+
+
 def test_a_callable_sdf_is_asked_within_the_budget():
     calls = []
 

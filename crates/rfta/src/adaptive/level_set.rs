@@ -23,12 +23,25 @@ use crate::{Params, Result, Stage};
 /// The finest grid's cells per axis at most (a dense grid of that many points is held).
 const MAX_CELLS: usize = 512;
 
+/// The base grid and its measure when the function is read as a level set ([`crate::field`]).
+pub(super) fn base_if_level_set(
+    lattice: &super::lattice::Lattice,
+    params: &Params,
+) -> Result<Option<(SdfSamples, FieldReport)>> {
+    if params.field == Field::Distance {
+        return Ok(None);
+    }
+    let (grid, values) = lattice.base_grid()?;
+    let base = SdfSamples::grid(grid, values)?;
+    let field = crate::field::measure(&base, params.field, params.clamp);
+    Ok(field.level_set.then_some((base, field)))
+}
+
 /// Refines `base` (the base grid, every value asked) by sign within `budget` evaluations in all,
 /// then reads the finest grid as a level set (the module docs). `field` is the base grid's
 /// measure, reported.
 pub(super) fn refine_and_read(
-    base: SdfSamples,
-    field: FieldReport,
+    (base, field): (SdfSamples, FieldReport),
     asker: &mut Asker<'_>,
     budget: usize,
     params: &Params,
@@ -61,32 +74,7 @@ pub(super) fn refine_and_read(
         if need.is_empty() || asked.len() + need.len() > budget {
             break;
         }
-        let coarse = CubicField::new(&grid, &values).ok_or_else(|| {
-            crate::Error::InvalidParams("the base grid needs two points per axis".into())
-        })?;
-        let mut next: Vec<f64> = (0..fine.len())
-            .into_par_iter()
-            .map(|i| {
-                let ijk = fine.ijk(i);
-                if ijk.iter().all(|c| c % 2 == 0) {
-                    let c = ijk.map(|c| c / 2);
-                    let j = grid.index(c[0], c[1], c[2]);
-                    if known[j] {
-                        return values[j];
-                    }
-                }
-                coarse.value_gradient(fine.position(i)).0
-            })
-            .collect();
-        let mut now_known: Vec<bool> = (0..fine.len())
-            .map(|i| {
-                let ijk = fine.ijk(i);
-                ijk.iter().all(|c| c % 2 == 0) && {
-                    let c = ijk.map(|c| c / 2);
-                    known[grid.index(c[0], c[1], c[2])]
-                }
-            })
-            .collect();
+        let (mut next, mut now_known) = carried(&grid, &values, &known, &fine)?;
         let points: Vec<DVec3> = need.iter().map(|&i| fine.position(i)).collect();
         let found = asker.values(&points)?;
         for ((&i, &v), &p) in need.iter().zip(&found).zip(&points) {
@@ -165,6 +153,34 @@ fn agree_with_asked(reconstruction: &mut crate::Reconstruction, asked: &SdfSampl
         });
     }
     Ok(())
+}
+
+/// The values of `fine` (`grid` halved) before any is asked: the asked ones of `grid` (`known`)
+/// where its points are, its cubic interpolant elsewhere; and which of them were asked.
+fn carried(
+    grid: &Grid,
+    values: &[f64],
+    known: &[bool],
+    fine: &Grid,
+) -> Result<(Vec<f64>, Vec<bool>)> {
+    let coarse = CubicField::new(grid, values).ok_or_else(|| {
+        crate::Error::InvalidParams("the base grid needs two points per axis".into())
+    })?;
+    // The point of `grid` at fine point `i`, if there is one.
+    let on_grid = |i: usize| {
+        let ijk = fine.ijk(i);
+        ijk.iter().all(|c| c % 2 == 0).then(|| {
+            let c = ijk.map(|c| c / 2);
+            grid.index(c[0], c[1], c[2])
+        })
+    };
+    Ok((0..fine.len())
+        .into_par_iter()
+        .map(|i| match on_grid(i) {
+            Some(j) if known[j] => (values[j], true),
+            _ => (coarse.value_gradient(fine.position(i)).0, false),
+        })
+        .unzip())
 }
 
 /// `grid` with its spacing halved over the same box.

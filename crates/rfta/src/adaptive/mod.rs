@@ -149,21 +149,8 @@ pub fn reconstruct_adaptive(
     on_pass: &mut dyn FnMut(&Pass),
     cancel: &AtomicBool,
 ) -> Result<AdaptiveReconstruction> {
-    params.validate()?;
+    validate(params, bounds, budget)?;
     let extent = bounds.max - bounds.min;
-    if !(bounds.min.is_finite() && bounds.max.is_finite() && extent.min_element() > 0.0) {
-        return Err(Error::InvalidParams(format!(
-            "the box must be finite with positive extent on every axis, not {:?} to {:?}",
-            bounds.min.to_array(),
-            bounds.max.to_array()
-        )));
-    }
-    if budget.evaluations < MIN_BUDGET {
-        return Err(Error::InvalidParams(format!(
-            "the budget must allow at least {MIN_BUDGET} evaluations, not {}",
-            budget.evaluations
-        )));
-    }
     // What the budget's samples would need, before the first evaluation (hostile test E15: a
     // budget of 1e11 ran on for minutes): an adaptive run holds at least what a grid of as many
     // samples does.
@@ -188,21 +175,9 @@ pub fn reconstruct_adaptive(
     asker.ask(&mut lattice, &corners)?;
     // A function whose values fall short of its zero set is refined by sign and read as a level
     // set (`level_set.rs`); the base grid says which.
-    if params.field != crate::Field::Distance {
-        let (grid, values) = lattice.base_grid()?;
-        let base = SdfSamples::grid(grid, values)?;
-        let field = crate::field::measure(&base, params.field, params.clamp);
-        if field.level_set {
-            return level_set::refine_and_read(
-                base,
-                field,
-                &mut asker,
-                budget.evaluations,
-                params,
-                progress,
-                on_pass,
-            );
-        }
+    if let Some(base) = level_set::base_if_level_set(&lattice, params)? {
+        let n = budget.evaluations;
+        return level_set::refine_and_read(base, &mut asker, n, params, progress, on_pass);
     }
     let guide = Params {
         rounds: params.rounds.min(GUIDE_ROUNDS),
@@ -257,6 +232,27 @@ pub fn reconstruct_adaptive(
         }
         seeds = Some(points);
     }
+}
+
+/// [`Error::InvalidParams`] for invalid `params`, a box that is not finite with positive extent,
+/// a budget under [`MIN_BUDGET`].
+fn validate(params: &Params, bounds: Aabb, budget: Budget) -> Result<()> {
+    params.validate()?;
+    let extent = bounds.max - bounds.min;
+    if !(bounds.min.is_finite() && bounds.max.is_finite() && extent.min_element() > 0.0) {
+        return Err(Error::InvalidParams(format!(
+            "the box must be finite with positive extent on every axis, not {:?} to {:?}",
+            bounds.min.to_array(),
+            bounds.max.to_array()
+        )));
+    }
+    if budget.evaluations < MIN_BUDGET {
+        return Err(Error::InvalidParams(format!(
+            "the budget must allow at least {MIN_BUDGET} evaluations, not {}",
+            budget.evaluations
+        )));
+    }
+    Ok(())
 }
 
 /// A pass before the last: the stages up to the fine-tuning rounds, started from `seeds`, then
