@@ -113,7 +113,7 @@ impl<'a> Plan<'a> {
         }
         let t = std::time::Instant::now();
         let field = field::measure(&samples, params.field, input.clamp);
-        journal.timed(Step::InputCheck, t);
+        journal.timed(Step::Field, t);
         if field.level_set {
             params.rounds = 0;
             if let (Field::Auto, Some(reach)) = (params.field, field.reach) {

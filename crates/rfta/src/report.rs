@@ -42,6 +42,8 @@ pub enum Stage {
 pub enum Step {
     /// The input check ([`crate::check`]).
     InputCheck,
+    /// How the values read: as distances or as a level set ([`crate::field`]).
+    Field,
     /// Empty-space rasterization of both sign sets.
     Rasterize,
     /// The initial tangency points.
@@ -68,6 +70,7 @@ impl std::fmt::Display for Step {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Step::InputCheck => write!(f, "input check"),
+            Step::Field => write!(f, "field measured"),
             Step::Rasterize => write!(f, "rasterize"),
             Step::InitialPoints => write!(f, "initial points"),
             Step::RoundSolve(n) => write!(f, "round {n}: screened Poisson"),
