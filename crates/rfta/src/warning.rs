@@ -112,7 +112,7 @@ impl fmt::Display for Warning {
             ),
             Self::LevelSet { reach } => write!(
                 f,
-                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (--field distance to read them as distances)",
+                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
                 100.0 * reach
             ),
             Self::Clamped { at, samples } => write!(
