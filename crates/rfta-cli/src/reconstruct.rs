@@ -300,6 +300,9 @@ pub(crate) fn describe(out: &rfta::Reconstruction, ui: &Ui, seconds: f64) {
         ui.say(answer);
     }
     ui.detail(r.agreement());
+    if let Some(field) = r.field_quality() {
+        ui.detail(field);
+    }
     if let Some(why) = &r.rounds.stopped_early {
         ui.say(format!("warning: fine-tuning stopped early ({why})"));
     }

@@ -71,7 +71,8 @@ pub fn report_figures(report: &rfta::Report) -> Vec<(String, String)> {
     let at = out.iter().take_while(|(k, _)| k != "all figures").count();
     let changes = (report.answers().into_iter())
         .chain(report.changes())
-        .map(|c| ("repair".to_string(), c));
+        .map(|c| ("repair".to_string(), c))
+        .chain(report.field_quality().map(|f| ("field".to_string(), f)));
     out.splice(at..at, changes);
     out
 }

@@ -366,6 +366,29 @@ impl Report {
         out
     }
 
+    /// How the values read ([`crate::field`]), in one sentence: how far they reach towards their
+    /// zero set, how many fall short of it, the gradient's norm at it, and whether they were
+    /// read as distances or as a level set; `None` for scattered samples (not measured).
+    pub fn field_quality(&self) -> Option<String> {
+        let f = &self.field;
+        let reach = f.reach?;
+        let slope = f.slope.map_or_else(String::new, |[lo, mid, hi]| {
+            format!(
+                "; gradient norm at it {lo:.2}, {mid:.2}, {hi:.2} (10th, 50th, 90th percentile)"
+            )
+        });
+        Some(format!(
+            "the values, read as {}: far from their zero set they reach {:.0}% of the way to it, {:.1}% of them fall short of it by over two spacings{slope}",
+            if f.level_set {
+                "a level set"
+            } else {
+                "distances"
+            },
+            100.0 * reach,
+            100.0 * f.short,
+        ))
+    }
+
     /// The agreement with the samples, in one sentence.
     pub fn agreement(&self) -> String {
         let c = &self.consistency;
