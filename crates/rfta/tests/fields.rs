@@ -50,6 +50,12 @@ fn a_network_like_field_is_meshed_at_its_zero_set_better_than_marching_cubes() {
     assert!(r.field.level_set, "{:?}", r.field);
     let reach = r.field.reach.expect("a reach");
     assert!(reach < 0.5, "{reach}");
+    let said = r.field_quality().expect("a grid's field is measured");
+    let percent = format!("reach {:.0}% of the way", 100.0 * reach);
+    assert!(
+        said.contains("read as a level set") && said.contains(&percent),
+        "{said}"
+    );
     assert!(
         r.warnings
             .iter()
@@ -86,6 +92,11 @@ fn exact_distances_are_read_as_distances_and_the_reading_can_be_forced() {
     assert!(!f.level_set);
     assert!((0.9..=1.1).contains(&f.reach.expect("a reach")), "{f:?}");
     assert_eq!(f.short, 0.0);
+    assert!(
+        out.report
+            .field_quality()
+            .is_some_and(|s| s.contains("read as distances"))
+    );
     assert_eq!(out.report.rounds.points_per_round.len(), 3);
     let forced = Params {
         field: Field::LevelSet,
@@ -129,6 +140,8 @@ fn scattered_samples_cannot_be_read_as_a_level_set() {
         field: Field::LevelSet,
         ..Params::default()
     };
+    let read = reconstruct(&samples, &Params::default()).expect("reconstruct");
+    assert_eq!(read.report.field_quality(), None);
     match reconstruct(&samples, &params) {
         Err(Error::InvalidParams(m)) => assert!(m.contains("level-set"), "{m}"),
         other => panic!("{:?}", other.map(|r| r.report.field)),
