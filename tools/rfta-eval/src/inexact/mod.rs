@@ -13,7 +13,8 @@
 //! a function ([`callable`]): rfta's adaptive mode against MISE (`--mise VENV` or
 //! `$RFTA_MISE_VENV`) at MISE's evaluations.
 //!
-//! Output: `<out>/results.csv`, `<out>/report.md` and each field's reference mesh
+//! Output: `<out>/results.csv`, `<out>/report.md`, `<out>/inexact-chamfer.svg` and each field's
+//! reference mesh
 //! (`<out>/FIELD-reference.ply`). The run fails when a goal is missed
 //! ([`goals`]): on networks, rfta's default above marching cubes' Chamfer or in more pieces; on
 //! any field, a reading above marching cubes' Chamfer, or a sample on the wrong side; on CSG, the
@@ -150,6 +151,7 @@ pub(crate) fn command(a: &Args) -> Result<()> {
     let md = markdown(&rows, &res, reference_res, samples)
         + &callable::markdown(&callable_rows, mise.is_some());
     std::fs::write(out.join("report.md"), &md)?;
+    chart(&out.join("inexact-chamfer.svg"), &rows, &res)?;
     println!("{md}");
     println!("wrote {}", out.display());
     goals(&rows, callable::missed(&callable_rows))
@@ -217,12 +219,11 @@ fn compare(field: &Field, n: usize, reference: &TriMesh, samples: usize) -> Resu
         sign_errors: None,
     }];
     let samples_in = SdfSamples::grid(grid, values)?;
+    // The default, then, on CSG, the reading it did not choose.
     let mut readings = vec![("rfta", rfta::Field::Auto)];
-    if field.kind == Kind::Csg {
-        readings.push(("rfta-distance", rfta::Field::Distance));
-        readings.push(("rfta-level-set", rfta::Field::LevelSet));
-    }
-    for (method, reading) in readings {
+    let mut k = 0;
+    while let Some(&(method, reading)) = readings.get(k) {
+        k += 1;
         let params = rfta::Params {
             field: reading,
             ..rfta::Params::default()
@@ -250,6 +251,13 @@ fn compare(field: &Field, n: usize, reference: &TriMesh, samples: usize) -> Resu
             reading: Some(r.report.field.clone()),
             sign_errors: Some(r.report.consistency.sign_errors),
         });
+        if reading == rfta::Field::Auto && field.kind == Kind::Csg {
+            readings.push(if r.report.field.level_set {
+                ("rfta-distance", rfta::Field::Distance)
+            } else {
+                ("rfta-level-set", rfta::Field::LevelSet)
+            });
+        }
     }
     Ok(rows)
 }
@@ -284,6 +292,42 @@ fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     }
     rfta_io::write_atomic(path, |w| w.write_all(s.as_bytes()))?;
     Ok(())
+}
+
+/// Mean Chamfer against N, one line per kind of field and method.
+fn chart(path: &Path, rows: &[Row], res: &[usize]) -> Result<()> {
+    let mut series: Vec<crate::chart::Line> = Vec::new();
+    for kind in [Kind::Network, Kind::Csg] {
+        let mut methods: Vec<&str> = Vec::new();
+        for r in rows.iter().filter(|r| r.kind == kind) {
+            if !methods.contains(&r.method) {
+                methods.push(r.method);
+            }
+        }
+        for m in methods {
+            let points = res
+                .iter()
+                .filter_map(|&n| {
+                    let these: Vec<f64> = (rows.iter())
+                        .filter(|r| r.kind == kind && r.n == n && r.method == m)
+                        .map(|r| r.chamfer)
+                        .collect();
+                    let mean = these.iter().sum::<f64>() / these.len() as f64;
+                    (!these.is_empty()).then_some((n as f64, mean))
+                })
+                .collect();
+            series.push((format!("{} {m}", kind.name()), m != "mc", points));
+        }
+    }
+    let ticks: Vec<(f64, String)> = res.iter().map(|&n| (n as f64, n.to_string())).collect();
+    crate::chart::line_chart(
+        path,
+        "Mean Chamfer to the field's zero set vs N (log scale)",
+        "N (grid cells per axis)",
+        &ticks,
+        &series,
+        1,
+    )
 }
 
 /// Whether a row has the reference's genus in one piece.
