@@ -436,14 +436,13 @@ def test_a_field_that_is_not_a_distance_is_read_as_a_level_set():
 
     with pytest.warns(rfta.RftaWarning, match="not distances"):
         r = rfta.reconstruct(flat(grid(24)))
-    f = r.report["field"]
-    assert f["level_set"] and f["reach"] < 0.5, f
+    assert r.report["level_set"] and r.report["reach"] < 0.5, r.report
     assert r.report["components"] == 1 and r.report["genus"] == 1
     # Its vertices on the torus within a tenth of a spacing (2 / 24).
     assert np.abs(torus_sdf(r.vertices)).max() < 0.1 * 2.0 / 24.0
-    assert not rfta.reconstruct(torus_sdf(grid(16)), preset="fast").report["field"]["level_set"]
+    assert not rfta.reconstruct(torus_sdf(grid(16)), preset="fast").report["level_set"]
     forced = rfta.reconstruct(torus_sdf(grid(16)), field="level-set")
-    assert forced.report["field"]["level_set"]
+    assert forced.report["level_set"]
     with pytest.raises(ValueError, match="field"):
         rfta.reconstruct(torus_sdf(grid(12)), field="occupancy")
     # As a function to ask: refined where its sign changes, within the budget.
@@ -454,7 +453,7 @@ def test_a_field_that_is_not_a_distance_is_read_as_a_level_set():
         return flat(p)
 
     r = rfta.reconstruct(sdf=counted, bounds=(-1, 1), budget=8000)
-    assert sum(asked) <= 8000 and r.report["field"]["level_set"]
+    assert sum(asked) <= 8000 and r.report["level_set"]
     assert r.report["components"] == 1 and r.report["genus"] == 1
 
 

@@ -51,9 +51,11 @@ pub struct FieldReport {
     pub reach: Option<f64>,
     /// Samples whose value falls short of that distance by more than two spacings (a distance
     /// never does), as a fraction of all.
+    #[serde(rename = "short_of_zero_set")]
     pub short: f64,
     /// The 10th, 50th and 90th percentiles of the gradient norm (central differences) at the
     /// samples next to a sign change: 1 for a distance sampled finely, lower at coarse grids.
+    #[serde(rename = "slope_at_zero_set")]
     pub slope: Option<[f64; 3]>,
 }
 

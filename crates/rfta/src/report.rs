@@ -137,6 +137,7 @@ pub struct Report {
     #[serde(flatten)]
     pub input: InputReport,
     /// How the samples were read ([`crate::field`]).
+    #[serde(flatten)]
     pub field: crate::FieldReport,
     /// The initial points'.
     #[serde(flatten)]
@@ -533,9 +534,9 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 6 + 4 + 4 + 14 fields, the mesh check's 7, the consistency check's 6
-        // (its sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 6 + 4 + 4 + 14 + 7 + 6 + 2, "{text}");
+        // The stages' 4 + 6 + 4 + 4 + 14 fields, how the values read 4, the mesh check's 7, the
+        // consistency check's 6 (its sample count left to the input's), warnings and timings.
+        assert_eq!(keys, 4 + 6 + 4 + 4 + 14 + 4 + 7 + 6 + 2, "{text}");
     }
 
     #[test]

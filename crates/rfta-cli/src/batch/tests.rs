@@ -83,6 +83,8 @@ fn every_reconstruct_option_reaches_the_rows() {
         "--keep-cavities",
         "--initial",
         "raster",
+        "--field",
+        "level-set",
     ])
     .expect("options");
     let mut given: Vec<String> = cli.args.checks.to_args(None);

@@ -318,7 +318,8 @@ def reconstruct(
         How the samples are read: as distances (the paper's spheres), as a level set whose zero
         set is the surface (grids only: a trained network's values, a CSG bound, any field that
         is not a distance), or, by default, as a level set when a grid's values fall short of
-        their zero set. ``report["field"]`` says how far they reach and how they were read.
+        their zero set. ``report["reach"]`` says how far they reach, ``report["level_set"]``
+        how they were read.
         With ``sdf``, the base grid decides: a level set is refined where its sign changes
         (as MISE does) and its finest grid read as one.
     check : bool
