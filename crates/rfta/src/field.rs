@@ -1,6 +1,6 @@
 //! Fields that are not distances: how far a grid's values can be read as distances
-//! ([`measure`]), and, where they cannot, the initial points on the field's zero set
-//! ([`zero_set_points`]) instead of on the spheres.
+//! (`measure`), and, where they cannot, the initial points on the field's zero set
+//! (`zero_set_points`) instead of on the spheres.
 //!
 //! Reach for the Arcs reads every `|s_i|` as the distance to the surface: the sphere of that
 //! radius touches it. Trained networks, CSG bounds and re-distanced level sets give values that
@@ -40,7 +40,7 @@ pub enum Field {
     LevelSet,
 }
 
-/// What [`measure`] found, and how the samples were read.
+/// What the field's measure found, and how the samples were read.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct FieldReport {
     /// The samples were read as a level set ([`Field::LevelSet`]), not as distances.
