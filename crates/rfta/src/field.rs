@@ -77,7 +77,8 @@ const REACH: f64 = 2.5;
 
 /// How the grid's values behave as distances (the module docs), and whether `field` reads them as
 /// a level set. Samples at or beyond `clamp` (a clamp given or detected: its plateaus fall short
-/// by design, and the spheres handle them) give no reach. Scattered samples are read as
+/// by design, and the spheres handle them), or at the largest magnitude of their sign (a clamp's
+/// plateau when the check is off), give no reach. Scattered samples are read as
 /// distances ([`crate::plan::Plan::new`] refuses [`Field::LevelSet`] for them).
 pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) -> FieldReport {
     let Some(grid) = samples.as_grid() else {
@@ -86,12 +87,18 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
     let values = samples.values();
     let h = grid.spacing().min_element();
     let below_clamp = clamp.map_or(f64::INFINITY, |c| c * (1.0 - 1e-9));
+    let (most_negative, most_positive) = values
+        .iter()
+        .fold((0.0f64, 0.0f64), |(n, p), &v| (n.min(v), p.max(v)));
+    let on_plateau = |v: f64| v == most_negative || v == most_positive;
     let marked = next_to_sign_change(samples);
     let nearest = grid.nearest_marked(&marked);
     let (ratios, short): (Vec<f64>, usize) = (0..values.len())
         .into_par_iter()
         .filter(|&i| {
-            nearest[i] != rfta_geom::feature_transform::NONE && values[i].abs() < below_clamp
+            nearest[i] != rfta_geom::feature_transform::NONE
+                && values[i].abs() < below_clamp
+                && !on_plateau(values[i])
         })
         .map(|i| {
             let d = grid
@@ -270,6 +277,15 @@ mod tests {
             None,
         );
         assert!(!forced.level_set);
+    }
+
+    /// A distance clamped exactly at 0.1 (a narrow band), the clamp not given: its plateau is
+    /// left out, and what is left reaches its zero set.
+    #[test]
+    fn a_hard_clamps_plateau_is_no_shortfall() {
+        let r = measure(&sphere_grid(32, |d| d.clamp(-0.1, 0.1)), Field::Auto, None);
+        assert!(!r.level_set, "{r:?}");
+        assert!(r.reach.is_none_or(|x| x > 0.9), "{r:?}");
     }
 
     #[test]
