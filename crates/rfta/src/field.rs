@@ -8,9 +8,9 @@
 //! go beyond it (a sphere the surface crosses). A distance reaches its zero set: a sample `d`
 //! from the nearest sample next to a sign change is within `d - sqrt(3) h` of the zero set, so a
 //! value shorter than `d - 2h` is not a distance. [`FieldReport::reach`] is the median of
-//! `|s| / d` over the samples at least `FAR` spacings from the zero set: 0.7 to 1 on every exact
-//! dev grid (thin parts the grid misses lower it at 11^3), about 0.16 on a network fitted
-//! DeepSDF-style (its values flatten at the training's clamp).
+//! `|s| / d` over the samples at least `FAR` spacings from the zero set: 0.8 to 1.06 on every exact
+//! dev grid (thin parts the grid misses lower it at 11^3), 0.14 to 0.18 on the networks fitted
+//! DeepSDF-style (their values flatten at the training's clamp).
 //!
 //! Below `REACH_FLOOR` the samples are read as a level set ([`Field::LevelSet`]): each sample
 //! within a spacing and a half of the zero set is moved to it by Newton's method on the grid's
