@@ -103,9 +103,9 @@ fn softplus(x: f32) -> f32 {
 mod tests {
     use super::*;
 
-    /// A network whose every weight is zero but the last layer's bias answers that bias
-    /// everywhere; one whose first layer reads x and passes through softplus answers a known
-    /// value (worked by hand).
+    /// A network whose unit 0 reads x and passes it through every softplus, the output bias
+    /// 0.25, answers values worked by hand; files of the wrong size, not .npy or missing are
+    /// errors.
     #[test]
     fn known_networks_answer_known_values() {
         let sizes: Vec<usize> = WIDTHS.windows(2).map(|w| w[0] * w[1] + w[1]).collect();
@@ -139,8 +139,18 @@ mod tests {
             "{} against {expected}",
             v[1]
         );
-        std::fs::remove_dir_all(&dir).ok();
-        std::fs::write(&path, b"not npy").ok();
+        // A file of the wrong size, one that is not .npy, one that is missing: errors.
+        let mut short = Vec::new();
+        rfta_io::write_npy_f64(&mut short, &[total - 1], &data[1..]).expect("npy");
+        std::fs::write(&path, short).expect("write");
+        let err = Mlp::load(&path)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(err.contains("parameters"), "{err}");
+        std::fs::write(&path, b"not npy").expect("write");
+        assert!(Mlp::load(&path).is_err());
         assert!(Mlp::load(&dir.join("missing.npy")).is_err());
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
