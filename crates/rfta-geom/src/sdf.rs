@@ -183,6 +183,27 @@ impl Grid {
         self.origin + DVec3::new(i as f64, j as f64, k as f64) * self.spacing
     }
 
+    /// The gradient of `values` (one per point, flat order) at point `index` by central
+    /// differences, one-sided on the grid's faces; an axis with one point contributes 0.
+    ///
+    /// # Panics
+    /// If `values` is shorter than the grid (a caller bug).
+    pub fn central_difference(&self, values: &[f64], index: usize) -> DVec3 {
+        let ijk = self.ijk(index);
+        let mut grad = DVec3::ZERO;
+        for a in 0..3 {
+            let (mut lo, mut hi) = (ijk, ijk);
+            lo[a] = lo[a].saturating_sub(1);
+            hi[a] = (hi[a] + 1).min(self.dims[a] - 1);
+            if hi[a] == lo[a] {
+                continue;
+            }
+            let v = |q: [usize; 3]| values[self.index(q[0], q[1], q[2])];
+            grad[a] = (v(hi) - v(lo)) / ((hi[a] - lo[a]) as f64 * self.spacing[a]);
+        }
+        grad
+    }
+
     /// The box from the first to the last point.
     pub fn bounds(&self) -> Aabb {
         let last = DVec3::new(
@@ -469,6 +490,37 @@ fn validate_values(values: &[f64]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Central differences are exact for linear functions everywhere (one-sided on the
+        /// faces too) and for quadratics inside; an axis of one point contributes 0.
+        #[test]
+        fn central_differences_of_linear_and_quadratic_functions(
+            c in prop::array::uniform3(-3.0f64..3.0),
+            index in 0usize..1000,
+        ) {
+            let grid = Grid::new([5, 7, 6], DVec3::new(-1.0, 0.5, 2.0), DVec3::new(0.3, 0.2, 0.7))
+                .expect("grid");
+            let i = index % grid.len();
+            let at = |f: &dyn Fn(DVec3) -> f64| -> Vec<f64> {
+                (0..grid.len()).map(|k| f(grid.position(k))).collect()
+            };
+            let lin = at(&|p| c[0] * p.x + c[1] * p.y + c[2] * p.z - 1.0);
+            let g = grid.central_difference(&lin, i);
+            prop_assert!((g - DVec3::from(c)).length() < 1e-9, "{g}");
+            let quad = at(&|p| c[0] * p.x * p.x + c[1] * p.y * p.z);
+            let [a, b, k] = grid.ijk(i);
+            if a > 0 && a < 4 && b > 0 && b < 6 && k > 0 && k < 5 {
+                let p = grid.position(i);
+                let exact = DVec3::new(2.0 * c[0] * p.x, c[1] * p.z, c[1] * p.y);
+                prop_assert!((grid.central_difference(&quad, i) - exact).length() < 1e-9);
+            }
+            let flat = Grid::new([3, 1, 2], DVec3::ZERO, DVec3::ONE).expect("grid");
+            let v: Vec<f64> = (0..flat.len()).map(|k| flat.position(k).x * 2.0 + flat.position(k).z).collect();
+            prop_assert_eq!(flat.central_difference(&v, 1), DVec3::new(2.0, 0.0, 1.0));
+        }
+    }
 
     /// A grid's spacing is its largest axis; scattered samples' that of a grid with as many
     /// samples in their box (three samples spanning a 2 x 3 x 4 box: the cube root of 24 / 3).

@@ -53,8 +53,9 @@ pub struct FieldReport {
     /// never does), as a fraction of all.
     #[serde(rename = "short_of_zero_set")]
     pub short: f64,
-    /// The 10th, 50th and 90th percentiles of the gradient norm (central differences) at the
-    /// samples next to a sign change: 1 for a distance sampled finely, lower at coarse grids.
+    /// The 10th, 50th and 90th percentiles of the gradient norm (central differences, one-sided
+    /// on the grid's faces, [`rfta_geom::Grid::central_difference`]) at the samples next to a
+    /// sign change: 1 for a distance sampled finely, lower at coarse grids.
     #[serde(rename = "slope_at_zero_set")]
     pub slope: Option<[f64; 3]>,
 }
@@ -126,7 +127,7 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
     let slopes: Vec<f64> = (0..values.len())
         .into_par_iter()
         .filter(|&i| marked[i])
-        .filter_map(|i| central_gradient(samples, i).map(|g| g.length()))
+        .map(|i| grid.central_difference(values, i).length())
         .collect();
     let slope = (!slopes.is_empty()).then(|| {
         let p = percentiles(slopes, &[0.1, 0.5, 0.9]);
@@ -203,25 +204,6 @@ fn next_to_sign_change(samples: &SdfSamples) -> Vec<bool> {
             })
         })
         .collect()
-}
-
-/// The central-difference gradient at grid sample `i`, `None` on the grid's faces.
-fn central_gradient(samples: &SdfSamples, i: usize) -> Option<rfta_geom::glam::DVec3> {
-    let grid = samples.as_grid()?;
-    let values = samples.values();
-    let (dims, ijk, spacing) = (grid.dims(), grid.ijk(i), grid.spacing());
-    let mut g = [0.0; 3];
-    for a in 0..3 {
-        if ijk[a] == 0 || ijk[a] + 1 >= dims[a] {
-            return None;
-        }
-        let (mut lo, mut hi) = (ijk, ijk);
-        lo[a] -= 1;
-        hi[a] += 1;
-        let d = values[grid.index(hi[0], hi[1], hi[2])] - values[grid.index(lo[0], lo[1], lo[2])];
-        g[a] = d / (2.0 * spacing[a]);
-    }
-    Some(g.into())
 }
 
 /// The values at fractions `at` of the sorted `values` (nearest rank).

@@ -174,29 +174,12 @@ impl UnitBox {
     ) -> Option<Vec<DVec3>> {
         use rayon::prelude::*;
         let g = self.grid.as_ref()?;
-        let dims = g.dims();
-        let h = g.spacing();
         let points = set
             .par_iter()
             .map(|&i| i as usize)
             .filter(|&i| keep(i))
             .filter_map(|i| {
-                let ijk = [
-                    i / (dims[1] * dims[2]),
-                    (i / dims[2]) % dims[1],
-                    i % dims[2],
-                ];
-                let mut grad = DVec3::ZERO;
-                for a in 0..3 {
-                    let (mut lo, mut hi) = (ijk, ijk);
-                    lo[a] = lo[a].saturating_sub(1);
-                    hi[a] = (hi[a] + 1).min(dims[a] - 1);
-                    if hi[a] == lo[a] {
-                        continue;
-                    }
-                    let v = |q: [usize; 3]| self.values[g.index(q[0], q[1], q[2])];
-                    grad[a] = (v(hi) - v(lo)) / ((hi[a] - lo[a]) as f64 * h[a]);
-                }
+                let grad = g.central_difference(&self.values, i);
                 let len = grad.length();
                 (len > 1e-12).then(|| self.spheres[i].center - self.values[i] * grad / len)
             })
