@@ -64,7 +64,7 @@ pub struct FieldReport {
 const FAR: f64 = 4.0;
 
 /// A [`FieldReport::reach`] below this reads the samples as a level set.
-pub(crate) const REACH_FLOOR: f64 = 0.5;
+const REACH_FLOOR: f64 = 0.5;
 
 /// Fewer far samples than this give no [`FieldReport::reach`].
 const MIN_FAR: usize = 100;
