@@ -180,6 +180,21 @@ pub(crate) struct Tuning {
     #[arg(long, value_enum)]
     #[serde(skip_serializing_if = "Option::is_none")]
     field: Option<FieldArg>,
+    /// Write the repaired mesh unsimplified. By default its edges are collapsed while the
+    /// surface stays within --simplify-tolerance of it, no sample changes side, no sphere is
+    /// entered past the consistency check's margin and the topology stays the same.
+    #[arg(long = "no-simplify", action = clap::ArgAction::SetFalse)]
+    #[serde(skip_serializing_if = "Clone::clone")]
+    simplify: bool,
+    /// How far the simplified surface may lie from the unsimplified one, in sample spacings
+    /// (default 0.05; no limit with --faces unless given).
+    #[arg(long, visible_alias = "tolerance", value_name = "SPACINGS", value_parser = crate::ui::parse_non_negative)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    simplify_tolerance: Option<f64>,
+    /// Simplify to at most this many faces, as far as the samples and the topology allow.
+    #[arg(long, value_name = "N")]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    faces: Option<usize>,
 }
 
 /// `--field`: `rfta::Field` by its serde names.
@@ -230,12 +245,13 @@ impl Tuning {
             gpu,
         ];
         for (name, value) in self.options() {
-            a.push(format!("--{}", name.replace('_', "-")));
+            let flag = name.replace('_', "-");
             match value {
-                // A flag (serialized only when given).
-                serde_json::Value::Bool(_) => {}
-                serde_json::Value::String(s) => a.push(s),
-                v => a.push(v.to_string()),
+                // A flag (serialized only when given): `--keep-cavities`, `--no-simplify`.
+                serde_json::Value::Bool(true) => a.push(format!("--{flag}")),
+                serde_json::Value::Bool(false) => a.push(format!("--no-{flag}")),
+                serde_json::Value::String(s) => a.extend([format!("--{flag}"), s]),
+                v => a.extend([format!("--{flag}"), v.to_string()]),
             }
         }
         a

@@ -74,7 +74,7 @@ pub use params::{InitialPoints, PRESETS, Params, Seeds, screening_at, spsr_depth
 pub use pool::{GlobalPool, cores, start_global_pool};
 pub use report::{
     FinalSolveReport, InitialReport, InputReport, MeshCheck, Reconstruction, RepairReport, Report,
-    RoundsReport, Stage, Step,
+    RoundsReport, SimplifyReport, Stage, Step,
 };
 pub use warning::Warning;
 
@@ -235,6 +235,7 @@ pub(crate) fn run(
         go_on()?;
         let (mesh, mut final_solve) = finish::final_solve(&plan, &cloud, &mut journal, progress)?;
         let (mesh, repair) = finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
+        let (mesh, simplify) = finish::simplify(&plan, mesh, &mut journal)?;
         let report = Report {
             input: plan.input.clone(),
             field: plan.field.clone(),
@@ -242,6 +243,7 @@ pub(crate) fn run(
             rounds,
             final_solve,
             repair,
+            simplify,
             ..Report::default()
         };
         finish::verdict(&plan, mesh, cloud, report, journal)

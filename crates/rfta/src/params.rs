@@ -109,6 +109,17 @@ pub struct Params {
     /// set is the surface; by default ([`Field::Auto`]) a grid whose values fall short of their
     /// zero set is read as a level set ([`crate::field`]).
     pub field: Field,
+    /// Simplify the repaired mesh (default `true`): edges collapsed by quadric error while the
+    /// surface stays within [`Params::simplify_tolerance`] of the unsimplified one, every sample
+    /// keeps its side, no sphere is entered deeper than the consistency check allows, and the
+    /// mesh keeps its topology ([`rfta_simplify`]). `false` returns the repaired mesh as it is.
+    pub simplify: bool,
+    /// How far, in sample spacings, the simplified surface may lie from the unsimplified one
+    /// (`None`: `SIMPLIFY_TOLERANCE` (0.05), or no limit when [`Params::faces`] is set).
+    pub simplify_tolerance: Option<f64>,
+    /// Simplify to at most this many faces, as far as the samples and the topology allow
+    /// (`None`: as far as the tolerance allows).
+    pub faces: Option<usize>,
 }
 
 /// The source of the initial tangency points ([`Params::initial`]).
@@ -152,6 +163,9 @@ impl Default for Params {
             keep_cavities: false,
             initial: InitialPoints::Gradient,
             field: Field::Auto,
+            simplify: true,
+            simplify_tolerance: None,
+            faces: None,
         }
     }
 }
@@ -353,6 +367,16 @@ impl Params {
         self.batch_size == 0 || self.batch_size >= n
     }
 
+    /// The simplification's tolerance in sample spacings ([`Params::simplify_tolerance`]);
+    /// `None`: no limit.
+    pub(crate) fn simplify_tolerance_spacings(&self) -> Option<f64> {
+        match (self.simplify_tolerance, self.faces) {
+            (Some(t), _) => Some(t),
+            (None, Some(_)) => None,
+            (None, None) => Some(crate::finish::SIMPLIFY_TOLERANCE),
+        }
+    }
+
     pub(crate) fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidParams(m));
         if self.max_points_per_sphere == 0 {
@@ -400,6 +424,13 @@ impl Params {
             && !(b > 0.0 && b.is_finite())
         {
             return bad(format!("owner_band must be finite and > 0, got {b}"));
+        }
+        if let Some(t) = self.simplify_tolerance
+            && !(t >= 0.0 && t.is_finite())
+        {
+            return bad(format!(
+                "simplify_tolerance must be finite and >= 0 (sample spacings), got {t}"
+            ));
         }
         if let Some(d) = self.spsr_depth
             && !(1..=16).contains(&d)

@@ -62,6 +62,8 @@ pub enum Step {
     Topology,
     /// Cavities the samples leave open opened (a final solve and a repair again).
     Cavities,
+    /// The repaired mesh simplified.
+    Simplify,
     /// The mesh check and the consistency check.
     Consistency,
 }
@@ -80,6 +82,7 @@ impl std::fmt::Display for Step {
             Step::SpheresCleared => write!(f, "spheres cleared"),
             Step::Topology => write!(f, "topology"),
             Step::Cavities => write!(f, "cavities opened"),
+            Step::Simplify => write!(f, "simplified"),
             Step::Consistency => write!(f, "consistency check"),
         }
     }
@@ -151,6 +154,9 @@ pub struct Report {
     /// The repair's.
     #[serde(flatten)]
     pub repair: RepairReport,
+    /// The simplification's.
+    #[serde(flatten)]
+    pub simplify: SimplifyReport,
     /// What the output mesh is like (checked before it is returned).
     #[serde(flatten)]
     pub mesh: MeshCheck,
@@ -231,6 +237,19 @@ pub struct FinalSolveReport {
     /// The side of the finest cells of the final solve, in the input's coordinates
     /// ([`rfta_spsr::SpsrReport::finest_cell`]).
     pub finest_cell: f64,
+}
+
+/// What the simplification did ([`crate::Params::simplify`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SimplifyReport {
+    /// Faces of the repaired mesh, before simplification (the output's own count is
+    /// [`MeshCheck`]'s).
+    #[serde(rename = "faces_unsimplified")]
+    pub faces_before: usize,
+    /// The largest distance measured between the simplified and the unsimplified surface, in
+    /// sample spacings (0 without simplification).
+    #[serde(rename = "simplify_deviation")]
+    pub largest_deviation: f64,
 }
 
 /// What the repair changed (step 6, `rfta-repair`'s steps).

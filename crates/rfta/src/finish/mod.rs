@@ -10,6 +10,7 @@
 //! by.
 
 mod islands;
+mod simplify;
 #[cfg(test)]
 mod tests;
 
@@ -29,6 +30,7 @@ use crate::{
 };
 
 use islands::{inverted_and_unenclosed, judge};
+pub(crate) use simplify::{SIMPLIFY_TOLERANCE, simplify};
 use rfta_repair::{
     CUT_GAP, Island, clear_spheres, cut_sub_cell_handles, dent_wrong_side, push_out_of_spheres,
     remove_islands, to_genus,

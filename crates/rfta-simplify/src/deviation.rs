@@ -1,0 +1,107 @@
+//! How far the simplified surface is from the input, both ways, kept within the tolerance.
+//!
+//! Input to output: every input vertex a collapse moves or removes is handed to a face of the
+//! collapse's new faces within the tolerance of it (the one it lay on when that face remains,
+//! else the nearest) and must have one; later collapses of that face hand it on (the bookkeeping
+//! of Hausdorff-bounded simplifiers since Klein, Liebich and Strasser, "Mesh reduction with error
+//! control", 1996). Output to input: each collapse's new vertex must lie within the tolerance of
+//! the input surface. The largest distance either way is kept.
+
+use rfta_geom::glam::DVec3;
+use rfta_geom::kernels::closest_point_on_triangle;
+use rfta_geom::TriMesh;
+use rfta_mesh::MeshIndex;
+
+use crate::editable::Change;
+
+/// Input vertex ids carried by the current faces, and the largest deviation so far.
+pub(crate) struct Deviation {
+    input: MeshIndex,
+    input_vertices: Vec<DVec3>,
+    tolerance_squared: f64,
+    /// For each current vertex, the input vertex at whose place it still is (`u32::MAX`: moved).
+    unmoved: Vec<u32>,
+    /// For each face, the input vertices it carries.
+    carried: Vec<Vec<u32>>,
+    pub(crate) largest: f64,
+}
+
+/// A collapse's hand-over: (input vertex, index into the change's `after`), and the largest
+/// distance it measured.
+#[derive(Default)]
+pub(crate) struct HandOver {
+    moves: Vec<(u32, usize)>,
+    largest: f64,
+}
+
+impl Deviation {
+    pub(crate) fn new(mesh: &TriMesh, tolerance: f64) -> rfta_mesh::Result<Self> {
+        Ok(Self {
+            input: MeshIndex::new(mesh)?,
+            input_vertices: mesh.vertices.clone(),
+            tolerance_squared: tolerance * tolerance,
+            unmoved: (0..mesh.n_vertices() as u32).collect(),
+            carried: vec![Vec::new(); mesh.n_faces()],
+            largest: 0.0,
+        })
+    }
+
+    /// Whether collapsing `b` into `a` as `change` says stays within the tolerance both ways;
+    /// the hand-over into `out` when it does.
+    pub(crate) fn allows(&self, a: u32, b: u32, change: &Change, out: &mut HandOver) -> bool {
+        out.moves.clear();
+        out.largest = 0.0;
+        let tol2 = self.tolerance_squared;
+        // Output to input: the new vertex.
+        match self.input.closest_point_within(change.target, tol2) {
+            Some(c) => out.largest = out.largest.max(c.distance_squared),
+            None => return false,
+        }
+        // Input to output: what the changed faces carry (tried first on the face it was on,
+        // when that face remains), and the two vertices if unmoved (on a face of theirs).
+        let carried = change.before_ids.iter().flat_map(|&f| {
+            let was = change.after_ids.iter().position(|&g| g == f);
+            self.carried[f as usize].iter().map(move |&i| (i, was))
+        });
+        let own = [a, b]
+            .into_iter()
+            .map(|v| self.unmoved[v as usize])
+            .filter(|&i| i != u32::MAX)
+            .map(|i| (i, Some(0)));
+        let distance2 = |p: DVec3, k: usize| {
+            let t = &change.after[k];
+            p.distance_squared(closest_point_on_triangle(p, t[0], t[1], t[2]).0)
+        };
+        for (i, first) in carried.chain(own) {
+            let p = self.input_vertices[i as usize];
+            let on_first = first
+                .filter(|&k| k < change.after.len())
+                .map(|k| (distance2(p, k), k))
+                .filter(|&(d2, _)| d2 <= tol2);
+            let best = on_first.unwrap_or_else(|| {
+                (0..change.after.len())
+                    .map(|k| (distance2(p, k), k))
+                    .fold((f64::INFINITY, 0), |b, c| if c.0 < b.0 { c } else { b })
+            });
+            if best.0 > tol2 {
+                return false;
+            }
+            out.largest = out.largest.max(best.0);
+            out.moves.push((i, best.1));
+        }
+        true
+    }
+
+    /// Records an accepted collapse of `b` into `a`.
+    pub(crate) fn commit(&mut self, a: u32, b: u32, change: &Change, hand_over: &HandOver) {
+        for &f in &change.before_ids {
+            self.carried[f as usize].clear();
+        }
+        for &(i, k) in &hand_over.moves {
+            self.carried[change.after_ids[k] as usize].push(i);
+        }
+        self.unmoved[a as usize] = u32::MAX;
+        self.unmoved[b as usize] = u32::MAX;
+        self.largest = self.largest.max(hand_over.largest.sqrt());
+    }
+}

@@ -1,0 +1,118 @@
+//! Simplification of closed triangle meshes by edge collapse, cheapest first by quadric error
+//! (Garland and Heckbert, "Surface simplification using quadric error metrics", SIGGRAPH 1997),
+//! that keeps what a mesh from signed distance samples has to keep:
+//!
+//! - **the topology**: a collapse is made only where the link condition holds (Dey et al. 1999),
+//!   so a closed manifold stays closed and manifold with the same genus and components; vertices
+//!   on a boundary or a non-manifold edge never move;
+//! - **the surface**: within [`Options::tolerance`] of the input both ways, measured where the
+//!   meshes have vertices (every input vertex within it of the output, every vertex a collapse
+//!   places within it of the input);
+//! - **the faces' shape**: no face turns over (nor by more than 60 degrees), none is left without
+//!   area or much thinner than the thinnest it replaces;
+//! - **the caller's judge**: every collapse that passes the rest is offered to a [`Judge`] as a
+//!   [`Patch`] (the faces before and after), which can refuse it; rfta's refuses any collapse
+//!   that moves the surface across a sample or deeper into a sample's sphere.
+//!
+//! It stops at [`Options::max_faces`] or when no collapse passes. Single-threaded and
+//! deterministic: the same mesh and options give the same output.
+//!
+//! # Example
+//! ```
+//! use rfta_geom::shapes;
+//! use rfta_simplify::{Options, simplify};
+//!
+//! // A finely tessellated ball of radius 1, kept within 0.01 of itself.
+//! let ball = shapes::icosphere(1.0, 5);
+//! let options = Options { tolerance: 0.01, max_faces: None };
+//! let out = simplify(&ball, &options, &mut |_: &rfta_simplify::Patch<'_>| true)?;
+//! assert!(out.mesh.n_faces() * 4 < ball.n_faces(), "{} faces", out.mesh.n_faces());
+//! assert!(out.largest_deviation <= 0.01);
+//! assert!(out.mesh.vertices.iter().all(|v| (v.length() - 1.0).abs() <= 0.01 + 1e-12));
+//! # Ok::<(), rfta_simplify::Error>(())
+//! ```
+
+mod collapse;
+mod deviation;
+mod editable;
+mod patch;
+mod quadric;
+
+use rfta_geom::TriMesh;
+
+pub use patch::Patch;
+
+/// What the simplification may do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// The largest distance between the input and the output surface, both ways (the mesh's
+    /// units; `f64::INFINITY`: no limit).
+    pub tolerance: f64,
+    /// Stop at this many faces (`None`: when no collapse passes).
+    pub max_faces: Option<usize>,
+}
+
+/// The caller's say over each collapse.
+pub trait Judge {
+    /// Whether the collapse that turns `patch.before` into `patch.after` may be made.
+    fn allows(&mut self, patch: &Patch<'_>) -> bool;
+}
+
+impl<F: FnMut(&Patch<'_>) -> bool> Judge for F {
+    fn allows(&mut self, patch: &Patch<'_>) -> bool {
+        self(patch)
+    }
+}
+
+/// A simplified mesh and what it took.
+#[derive(Debug, Clone)]
+pub struct Simplified {
+    /// The output: the input's surviving vertices and faces in their order, unused vertices
+    /// dropped.
+    pub mesh: TriMesh,
+    /// Edge collapses made (each removes two faces and a vertex).
+    pub collapses: usize,
+    /// The largest distance measured between the input and the output, both ways (at most
+    /// [`Options::tolerance`]; see the crate documentation for where it is measured).
+    pub largest_deviation: f64,
+}
+
+/// Why a mesh cannot be simplified.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The tolerance is negative or NaN.
+    #[error("the tolerance must be zero or more (got {0})")]
+    Tolerance(f64),
+    /// The mesh is not valid (an index out of range, a vertex that is not finite).
+    #[error("{0}")]
+    Invalid(#[from] rfta_geom::Error),
+    /// The mesh cannot be indexed (no faces).
+    #[error("{0}")]
+    Mesh(#[from] rfta_mesh::Error),
+}
+
+/// `mesh` simplified as `options` allow and `judge` agrees (see the crate documentation).
+///
+/// # Errors
+/// [`Error::Tolerance`] for a negative or NaN tolerance, [`Error::Invalid`] for an invalid mesh,
+/// [`Error::Mesh`] for one that cannot be indexed.
+pub fn simplify(mesh: &TriMesh, options: &Options, judge: &mut dyn Judge) -> Result<Simplified, Error> {
+    if options.tolerance.is_nan() || options.tolerance < 0.0 {
+        return Err(Error::Tolerance(options.tolerance));
+    }
+    mesh.validate()?;
+    let mut deviation = deviation::Deviation::new(mesh, options.tolerance)?;
+    let mut editable = editable::Editable::new(mesh);
+    let collapses = collapse::run(
+        &mut editable,
+        &mut deviation,
+        options.max_faces.unwrap_or(0),
+        judge,
+    );
+    Ok(Simplified {
+        mesh: editable.into_mesh(),
+        collapses,
+        largest_deviation: deviation.largest,
+    })
+}

@@ -1,0 +1,205 @@
+//! The repaired mesh simplified ([`rfta_simplify`]) so that every sample keeps its verdict: no
+//! collapse moves the surface across a sample with a side (`|s| > SIGN_MARGIN h`), and none
+//! brings it into a sample's sphere deeper than `ENTER_SLACK h` unless it was deeper already, so
+//! a sphere the consistency check ([`crate::consistency`]) does not count as entered stays
+//! uncounted, and one it counts is entered no deeper. (A surface within a tolerance of another
+//! enters the spheres that one touches by up to that tolerance: a chord of a convex part enters
+//! the inside spheres tangent to it. The slack is what the verdict allows, not what repair left.)
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use rfta_geom::glam::DVec3;
+use rfta_geom::{Sphere, TriMesh};
+use rfta_mesh::MeshIndex;
+use rfta_simplify::{Judge, Options, Patch};
+use rfta_sphere_tree::SphereTree;
+
+use crate::consistency::{ENTER_MARGIN, SIGN_MARGIN};
+use crate::plan::Plan;
+use crate::report::{Journal, SimplifyReport};
+use crate::{Result, Step};
+
+/// A collapse may bring the surface into a sphere up to this many spacings deep (four fifths of
+/// the margin at which the consistency check counts a sphere as entered).
+const ENTER_SLACK: f64 = 0.8 * ENTER_MARGIN;
+
+/// The surface is measured within the tolerance at its vertices and its faces' centroids; a
+/// sample is watched when it is within this many tolerances of being touched.
+const WATCH: f64 = 1.2;
+
+/// The default [`crate::Params::simplify_tolerance`]: the simplified surface stays within this
+/// many sample spacings of the unsimplified one (chosen by measurement, docs/eval/README.md).
+pub(crate) const SIMPLIFY_TOLERANCE: f64 = 0.05;
+
+/// `mesh` (the samples' coordinates) simplified as [`crate::Params`] say, with its report; the
+/// mesh as it is when simplification is off.
+pub(crate) fn simplify(
+    plan: &Plan<'_>,
+    mesh: TriMesh,
+    journal: &mut Journal,
+) -> Result<(TriMesh, SimplifyReport)> {
+    let params = &plan.params;
+    let mut report = SimplifyReport {
+        faces_before: mesh.n_faces(),
+        ..SimplifyReport::default()
+    };
+    if !params.simplify || mesh.n_faces() == 0 {
+        return Ok((mesh, report));
+    }
+    let t = Instant::now();
+    let h = plan.samples.spacing();
+    let tolerance = params.simplify_tolerance_spacings().map_or(f64::INFINITY, |k| k * h);
+    let mut judge = SampleJudge::new(plan, &mesh, tolerance)?;
+    let options = Options {
+        tolerance,
+        max_faces: params.faces,
+    };
+    let out = rfta_simplify::simplify(&mesh, &options, &mut judge).map_err(|e| match e {
+        rfta_simplify::Error::Mesh(e) => crate::Error::Consistency(e),
+        other => crate::Error::InvalidParams(other.to_string()),
+    })?;
+    report.largest_deviation = out.largest_deviation / h;
+    journal.timed(Step::Simplify, t);
+    Ok((out.mesh, report))
+}
+
+/// The samples a collapse could change the verdict of, as spheres in the samples' coordinates,
+/// each filed under the cells (one sample spacing wide) around the part of the mesh it watches.
+struct SampleJudge {
+    cells: HashMap<[i64; 3], Vec<u32>>,
+    cell: f64,
+    spheres: Vec<Sphere>,
+    /// Whether each sphere's sample has a side (`|s| > SIGN_MARGIN h`).
+    sided: Vec<bool>,
+    /// Whether each sphere is a constraint (distances; not a level set's).
+    spheres_bind: bool,
+    slack: f64,
+    hits: Vec<u32>,
+}
+
+impl SampleJudge {
+    /// The samples whose verdict a surface within `tolerance` of `mesh` could change: those
+    /// within `w = max(r - slack, 0) + WATCH tolerance` of it (`r` their sphere's radius), of
+    /// spheres up to `CLEAR_BELOW` owner radii, the ones repair clears (a wider sphere the surface
+    /// touches is entered by a surface within the tolerance by less than a narrower one there).
+    /// With the default tolerance, below the slack, those are the few spheres the mesh already
+    /// enters and the samples within a tolerance of it. Each is filed under the cells the box
+    /// of the mesh within `w` of it touches (its closest point and the vertices there, grown by
+    /// half a spacing and the watch): a collapse elsewhere comes no nearer to it than `w`.
+    fn new(plan: &Plan<'_>, mesh: &TriMesh, tolerance: f64) -> Result<Self> {
+        let unit = &plan.unit;
+        let h = plan.samples.spacing();
+        let slack = ENTER_SLACK * h;
+        let reach = unit.to_input_length(super::CLEAR_BELOW * plan.owner_radius);
+        let index = MeshIndex::new(mesh)?;
+        crate::pool::waiters_back();
+        let near: Vec<(Sphere, bool, f64, DVec3)> = (0..unit.len())
+            .into_par_iter()
+            .filter_map(|i| {
+                let s = &unit.spheres[i];
+                let sphere = Sphere::new(unit.to_input(s.center), unit.to_input_length(s.radius));
+                if sphere.radius > reach {
+                    return None;
+                }
+                let watch = (sphere.radius - slack).max(0.0) + WATCH * tolerance;
+                let foot = index.closest_point_within(sphere.center, watch * watch)?;
+                let sided = unit.values[i].abs() > SIGN_MARGIN * unit.spacing();
+                Some((sphere, sided, watch, foot.point))
+            })
+            .collect();
+        // The vertices within each watched sphere's reach.
+        let reaches: Vec<Sphere> = near.iter().map(|n| Sphere::new(n.0.center, n.2)).collect();
+        let tree = SphereTree::new(&reaches);
+        let inside: Vec<(u32, DVec3)> = mesh
+            .vertices
+            .par_iter()
+            .flat_map_iter(|&v| {
+                let mut hits = Vec::new();
+                tree.spheres_within_into(v, 0.0, None, &mut hits);
+                hits.into_iter().map(move |j| (j, v))
+            })
+            .collect();
+        let mut boxes: Vec<(DVec3, DVec3)> = near.iter().map(|n| (n.3, n.3)).collect();
+        for (j, v) in inside {
+            let b = &mut boxes[j as usize];
+            *b = (b.0.min(v), b.1.max(v));
+        }
+        let grow = DVec3::splat(0.5 * h + WATCH * tolerance.min(h));
+        let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for (j, (lo, hi)) in boxes.into_iter().enumerate() {
+            for key in cells_of(lo - grow, hi + grow, h) {
+                cells.entry(key).or_default().push(j as u32);
+            }
+        }
+        let (spheres, sided): (Vec<Sphere>, Vec<bool>) =
+            near.into_iter().map(|n| (n.0, n.1)).unzip();
+        Ok(Self {
+            cells,
+            cell: h,
+            spheres,
+            sided,
+            spheres_bind: !plan.field.level_set,
+            slack,
+            hits: Vec::new(),
+        })
+    }
+}
+
+/// The keys of the cells `size` wide that the box `lo..hi` touches.
+fn cells_of(lo: DVec3, hi: DVec3, size: f64) -> impl Iterator<Item = [i64; 3]> {
+    let key = |x: DVec3| (x / size).floor().as_i64vec3();
+    let (a, b) = (key(lo), key(hi));
+    (a.x..=b.x).flat_map(move |x| (a.y..=b.y).flat_map(move |y| (a.z..=b.z).map(move |z| [x, y, z])))
+}
+
+impl Judge for SampleJudge {
+    fn allows(&mut self, patch: &Patch<'_>) -> bool {
+        let (centre, radius) = patch.bounding_ball();
+        let corners = || patch.before.iter().chain(patch.after).flatten();
+        let (lo, hi) = corners().fold((centre, centre), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+        self.hits.clear();
+        for key in cells_of(lo, hi, self.cell) {
+            if let Some(ids) = self.cells.get(&key) {
+                self.hits.extend_from_slice(ids);
+            }
+        }
+        self.hits.sort_unstable();
+        self.hits.dedup();
+        if self.hits.is_empty() {
+            return true;
+        }
+        // The slab around the patch's mean plane that holds both fans: a sample outside it is
+        // not swept, a sphere that does not reach into it by the slack is not entered by it.
+        let normal = patch
+            .after
+            .iter()
+            .map(|t| (t[1] - t[0]).cross(t[2] - t[0]))
+            .sum::<DVec3>()
+            .normalize_or_zero();
+        let height = |x: DVec3| normal.dot(x - centre);
+        let (lo, hi) = corners().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(height(x)), hi.max(height(x)))
+            });
+        self.hits.iter().all(|&j| {
+            let s = &self.spheres[j as usize];
+            let p: DVec3 = s.center;
+            let z = height(p);
+            let outside = (lo - z).max(z - hi);
+            if self.sided[j as usize]
+                && outside < 0.0
+                && p.distance(centre) <= radius
+                && patch.sweeps(p)
+            {
+                return false;
+            }
+            if !self.spheres_bind || outside >= s.radius - self.slack {
+                return true;
+            }
+            let after = patch.distance_after(p);
+            after >= s.radius - self.slack || after >= patch.distance_before(p)
+        })
+    }
+}
+
