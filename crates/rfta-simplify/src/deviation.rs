@@ -52,10 +52,13 @@ impl Deviation {
         out.moves.clear();
         out.largest = 0.0;
         let tol2 = self.tolerance_squared;
-        // Output to input: the new vertex.
-        match self.input.closest_point_within(change.target, tol2) {
-            Some(c) => out.largest = out.largest.max(c.distance_squared),
-            None => return false,
+        // Output to input: the new vertex and the new faces' centroids.
+        let centroids = change.after.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0);
+        for p in std::iter::once(change.target).chain(centroids) {
+            match self.input.closest_point_within(p, tol2) {
+                Some(c) => out.largest = out.largest.max(c.distance_squared),
+                None => return false,
+            }
         }
         // Input to output: what the changed faces carry (tried first on the face it was on,
         // when that face remains), and the two vertices if unmoved (on a face of theirs).

@@ -235,7 +235,8 @@ pub(crate) fn run(
         go_on()?;
         let (mesh, mut final_solve) = finish::final_solve(&plan, &cloud, &mut journal, progress)?;
         let (mesh, repair) = finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
-        let (mesh, simplify) = finish::simplify(&plan, mesh, &mut journal)?;
+        let spacing = plan.samples.spacing();
+        let (mesh, simplify) = finish::simplify(&plan, mesh, spacing, &mut journal)?;
         let report = Report {
             input: plan.input.clone(),
             field: plan.field.clone(),

@@ -275,6 +275,9 @@ def reconstruct(
     keep_cavities: bool = False,
     initial: Optional[str] = None,
     field: Optional[str] = None,
+    simplify: bool = True,
+    simplify_tolerance: Optional[float] = None,
+    faces: Optional[int] = None,
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
     verbose: bool = False,
@@ -322,6 +325,14 @@ def reconstruct(
         how they were read.
         With ``sdf``, the base grid decides: a level set is refined where its sign changes
         (as MISE does) and its finest grid read as one.
+    simplify, simplify_tolerance, faces
+        By default the mesh is simplified: edges collapsed while the surface stays within
+        ``simplify_tolerance`` sample spacings (default 0.05) of the unsimplified one, no sample
+        changes side, no sphere is entered past the consistency check's margin and the topology
+        stays the same; ``faces`` asks for at most that many faces (without a tolerance unless
+        one is given). ``simplify=False`` returns the mesh unsimplified (``rfta reconstruct
+        --no-simplify``). ``report["faces_unsimplified"]`` and ``report["simplify_deviation"]``
+        (spacings) say what it did.
     check : bool
         Refuse values that are not a signed distance (and detect a clamp); False to go on.
     progress : callable(stage, done, of), optional
@@ -347,7 +358,8 @@ def reconstruct(
             clamp=clamp, check=check, depth=depth, screening=screening,
             owner_band=owner_band, raster_resolution=raster_resolution,
             min_island=min_island, genus=genus, keep_cavities=keep_cavities,
-            initial=initial, field=field, threads=threads,
+            initial=initial, field=field, simplify=simplify,
+            simplify_tolerance=simplify_tolerance, faces=faces, threads=threads,
         )
         V, F, P, N, report, adaptive, positions, values = _rfta.reconstruct_adaptive(
             _host(sdf), lo, hi, budget, preset=preset, options=options,
@@ -386,6 +398,9 @@ def reconstruct(
         keep_cavities=keep_cavities,
         initial=initial,
         field=field,
+        simplify=simplify,
+        simplify_tolerance=simplify_tolerance,
+        faces=faces,
         threads=threads,
     )
     V, F, P, N, report = _run(

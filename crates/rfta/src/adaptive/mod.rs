@@ -336,12 +336,16 @@ fn final_pass(
             repair.cavities = rfta_mesh::cavities(mesh).len();
             Ok::<_, Error>(())
         })?;
+        // Simplified at the finest level's spacing, where the surface is.
+        let finest = lattice.finest_spacing();
+        let (mesh, simplify) = finish::simplify(&plan, mesh, finest, &mut journal)?;
         let report = crate::Report {
             input: plan.input.clone(),
             initial,
             rounds,
             final_solve,
             repair,
+            simplify,
             ..crate::Report::default()
         };
         finish::verdict(&plan, mesh, cloud, report, journal)

@@ -33,11 +33,13 @@ const WATCH: f64 = 1.2;
 /// many sample spacings of the unsimplified one (chosen by measurement, docs/eval/README.md).
 pub(crate) const SIMPLIFY_TOLERANCE: f64 = 0.05;
 
-/// `mesh` (the samples' coordinates) simplified as [`crate::Params`] say, with its report; the
-/// mesh as it is when simplification is off.
+/// `mesh` (the samples' coordinates) simplified as [`crate::Params`] say, its tolerance and
+/// margins in units of `spacing` (the samples' own, or where the surface is, an adaptive run's
+/// finest), with its report; the mesh as it is when simplification is off.
 pub(crate) fn simplify(
     plan: &Plan<'_>,
     mesh: TriMesh,
+    spacing: f64,
     journal: &mut Journal,
 ) -> Result<(TriMesh, SimplifyReport)> {
     let params = &plan.params;
@@ -49,9 +51,9 @@ pub(crate) fn simplify(
         return Ok((mesh, report));
     }
     let t = Instant::now();
-    let h = plan.samples.spacing();
+    let h = spacing;
     let tolerance = params.simplify_tolerance_spacings().map_or(f64::INFINITY, |k| k * h);
-    let mut judge = SampleJudge::new(plan, &mesh, tolerance)?;
+    let mut judge = SampleJudge::new(plan, &mesh, h, tolerance)?;
     let options = Options {
         tolerance,
         max_faces: params.faces,
@@ -88,9 +90,8 @@ impl SampleJudge {
     /// enters and the samples within a tolerance of it. Each is filed under the cells the box
     /// of the mesh within `w` of it touches (its closest point and the vertices there, grown by
     /// half a spacing and the watch): a collapse elsewhere comes no nearer to it than `w`.
-    fn new(plan: &Plan<'_>, mesh: &TriMesh, tolerance: f64) -> Result<Self> {
+    fn new(plan: &Plan<'_>, mesh: &TriMesh, h: f64, tolerance: f64) -> Result<Self> {
         let unit = &plan.unit;
-        let h = plan.samples.spacing();
         let slack = ENTER_SLACK * h;
         let reach = unit.to_input_length(super::CLEAR_BELOW * plan.owner_radius);
         let index = MeshIndex::new(mesh)?;
@@ -105,7 +106,7 @@ impl SampleJudge {
                 }
                 let watch = (sphere.radius - slack).max(0.0) + WATCH * tolerance;
                 let foot = index.closest_point_within(sphere.center, watch * watch)?;
-                let sided = unit.values[i].abs() > SIGN_MARGIN * unit.spacing();
+                let sided = unit.to_input_length(unit.values[i].abs()) > SIGN_MARGIN * h;
                 Some((sphere, sided, watch, foot.point))
             })
             .collect();
