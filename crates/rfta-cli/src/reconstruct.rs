@@ -187,11 +187,12 @@ pub(crate) struct Tuning {
     #[serde(skip_serializing_if = "Clone::clone")]
     simplify: bool,
     /// How far the simplified surface may lie from the unsimplified one, in sample spacings
-    /// (default 0.05; no limit with --faces unless given).
+    /// (default 0.05; with --faces, 1 unless given).
     #[arg(long, visible_alias = "tolerance", value_name = "SPACINGS", value_parser = crate::ui::parse_non_negative)]
     #[serde(skip_serializing_if = "Option::is_none")]
     simplify_tolerance: Option<f64>,
-    /// Simplify to at most this many faces, as far as the samples and the topology allow.
+    /// Simplify to at most this many faces, as far as the samples, the topology and the
+    /// tolerance allow.
     #[arg(long, value_name = "N")]
     #[serde(skip_serializing_if = "Option::is_none")]
     faces: Option<usize>,

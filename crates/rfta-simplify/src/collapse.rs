@@ -4,6 +4,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
 use crate::deviation::{Deviation, HandOver};
@@ -18,14 +19,14 @@ const MIN_TURN_COS: f64 = 0.5;
 /// for an equilateral triangle), or than the thinnest face it replaces when that is thinner.
 const MIN_QUALITY: f64 = 0.1;
 
-/// An edge in the queue: its collapse's error and target, and the vertices' edit counts when it
-/// was priced (a stale entry is skipped).
+/// An edge in the queue: its collapse's error and the vertices' edit counts when it was priced
+/// (a stale entry is skipped). The target is priced again when the edge is taken: a small entry
+/// keeps the heap, which holds several stale entries per edge, in cache.
 struct Entry {
     cost: f64,
     keep: u32,
     drop: u32,
     stamps: [u32; 2],
-    target: DVec3,
 }
 
 impl Ord for Entry {
@@ -55,49 +56,86 @@ impl Eq for Entry {}
 
 /// Collapses edges while the mesh has more than `max_faces` faces and some collapse passes;
 /// returns the number made.
+///
+/// The cheapest edges are taken in batches of up to `BATCH` whose changes touch no common
+/// vertex (an edge whose change meets one taken waits for the next batch); a batch is tried in
+/// parallel (every test only reads the mesh) and the collapses that pass are made in the order
+/// they were taken. Which edges make a batch depends only on the queue, so the output does not
+/// depend on the number of threads.
 pub(crate) fn run(
     mesh: &mut Editable,
     deviation: &mut Deviation,
     max_faces: usize,
-    judge: &mut dyn Judge,
+    judge: &dyn Judge,
 ) -> usize {
     let mut queue = Queue::new(mesh);
-    let mut change = Change::default();
-    let mut hand_over = HandOver::default();
-    let mut scratch = [Vec::new(), Vec::new()];
+    let mut taken_by = vec![u32::MAX; mesh.positions.len()];
+    let mut around = Vec::new();
     let mut collapses = 0;
+    let mut round = 0u32;
     while mesh.live_faces > max_faces {
-        let Some(e) = queue.heap.pop() else { break };
-        let (a, b) = (e.keep, e.drop);
-        if !mesh.is_alive(a)
-            || !mesh.is_alive(b)
-            || e.stamps != [queue.stamps[a as usize], queue.stamps[b as usize]]
-            || !mesh.can_collapse(a, b, &mut scratch)
-        {
-            continue;
+        let (batch, waiting) = queue.take(mesh, &mut taken_by, round, &mut around);
+        round += 1;
+        queue.heap.extend(waiting);
+        if batch.is_empty() {
+            break;
         }
-        mesh.change(a, b, e.target, &mut change);
-        if !keeps_shape(&change)
-            || !deviation.allows(a, b, &change, &mut hand_over)
-            || !judge.allows(&Patch {
-                before: &change.before,
-                after: &change.after,
-            })
-        {
-            continue;
+        let tried: Vec<Option<(Change, HandOver)>> = batch
+            .par_iter()
+            .map(|&(ref e, target)| try_collapse(mesh, deviation, judge, e, target))
+            .collect();
+        for ((e, target), passed) in batch.iter().zip(tried) {
+            let Some((change, hand_over)) = passed else {
+                continue;
+            };
+            if mesh.live_faces <= max_faces {
+                break;
+            }
+            let (a, b) = (e.keep, e.drop);
+            deviation.commit(a, b, &change, &hand_over);
+            mesh.collapse(a, b, *target);
+            collapses += 1;
+            let q = queue.quadrics[a as usize].add(&queue.quadrics[b as usize]);
+            queue.quadrics[a as usize] = q;
+            queue.stamps[a as usize] += 1;
+            queue.stamps[b as usize] += 1;
+            mesh.neighbours(a, &mut around);
+            for &n in &around {
+                queue.push(mesh, a, n);
+            }
         }
-        deviation.commit(a, b, &change, &hand_over);
-        mesh.collapse(a, b, e.target);
-        collapses += 1;
-        queue.quadrics[a as usize] = queue.quadrics[a as usize].add(&queue.quadrics[b as usize]);
-        queue.stamps[a as usize] += 1;
-        queue.stamps[b as usize] += 1;
-        mesh.neighbours(a, &mut scratch[0]);
-        for &n in &scratch[0] {
-            queue.push(mesh, a, n);
-        }
+        queue.drop_stale(mesh);
     }
     collapses
+}
+
+/// Edges taken together: no two changes share a vertex.
+const BATCH: usize = 64;
+
+/// The change collapsing `e` makes and its hand-over, when every test passes: the topology,
+/// the faces' shape, the tolerance and the judge, in that order.
+fn try_collapse(
+    mesh: &Editable,
+    deviation: &Deviation,
+    judge: &dyn Judge,
+    e: &Entry,
+    target: DVec3,
+) -> Option<(Change, HandOver)> {
+    let (a, b) = (e.keep, e.drop);
+    let mut scratch = [Vec::new(), Vec::new()];
+    if !mesh.can_collapse(a, b, &mut scratch) {
+        return None;
+    }
+    let mut change = Change::default();
+    mesh.change(a, b, target, &mut change);
+    let mut hand_over = HandOver::default();
+    let passes = keeps_shape(&change)
+        && deviation.allows(a, b, &change, &mut hand_over)
+        && judge.allows(&Patch {
+            before: &change.before,
+            after: &change.after,
+        });
+    passes.then_some((change, hand_over))
 }
 
 /// The priority queue of edges and what prices them.
@@ -108,6 +146,49 @@ struct Queue {
 }
 
 impl Queue {
+    /// Up to `BATCH` current edges, cheapest first, whose changes (the vertices of both ends'
+    /// faces) share no vertex, marking those vertices with `round` in `taken_by`; and the
+    /// current edges passed over for meeting one, to queue again (at most `BATCH`: then the
+    /// batch is closed).
+    fn take(
+        &mut self,
+        mesh: &Editable,
+        taken_by: &mut [u32],
+        round: u32,
+        around: &mut Vec<u32>,
+    ) -> (Vec<(Entry, DVec3)>, Vec<Entry>) {
+        let (mut batch, mut waiting) = (Vec::new(), Vec::new());
+        while batch.len() < BATCH {
+            let Some(e) = self.heap.pop() else { break };
+            let (a, b) = (e.keep, e.drop);
+            let current = mesh.is_alive(a)
+                && mesh.is_alive(b)
+                && e.stamps == [self.stamps[a as usize], self.stamps[b as usize]];
+            if !current {
+                continue;
+            }
+            around.clear();
+            for v in [a, b] {
+                for &f in mesh.faces_of(v) {
+                    around.extend(mesh.faces[f as usize]);
+                }
+            }
+            if around.iter().any(|&v| taken_by[v as usize] == round) {
+                waiting.push(e);
+                if waiting.len() == BATCH {
+                    break;
+                }
+                continue;
+            }
+            for &v in around.iter() {
+                taken_by[v as usize] = round;
+            }
+            let target = self.price(mesh, a, b).1;
+            batch.push((e, target));
+        }
+        (batch, waiting)
+    }
+
     /// Each vertex's quadric is the planes of its faces, weighted by their areas; every edge
     /// between two free vertices is priced.
     fn new(mesh: &Editable) -> Self {
@@ -148,6 +229,30 @@ impl Queue {
         if mesh.is_locked(keep) || mesh.is_locked(drop) {
             return;
         }
+        let cost = self.price(mesh, keep, drop).0;
+        self.heap.push(Entry {
+            cost,
+            keep,
+            drop,
+            stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
+        });
+    }
+
+    /// Drops the stale entries once they are most of the heap (three for each live edge).
+    fn drop_stale(&mut self, mesh: &Editable) {
+        let live_edges = 3 * mesh.live_faces / 2;
+        if self.heap.len() > 4 * live_edges {
+            let stamps = &self.stamps;
+            self.heap.retain(|e| {
+                mesh.is_alive(e.keep)
+                    && mesh.is_alive(e.drop)
+                    && e.stamps == [stamps[e.keep as usize], stamps[e.drop as usize]]
+            });
+        }
+    }
+
+    /// The error of collapsing `keep` and `drop`, and where the vertex goes.
+    fn price(&self, mesh: &Editable, keep: u32, drop: u32) -> (f64, DVec3) {
         let q = self.quadrics[keep as usize].add(&self.quadrics[drop as usize]);
         let (pk, pd) = (
             mesh.positions[keep as usize],
@@ -165,13 +270,7 @@ impl Queue {
                     .min_by(|x, y| q.error(*x).total_cmp(&q.error(*y)))
                     .unwrap_or(mid)
             });
-        self.heap.push(Entry {
-            cost: q.error(target),
-            keep,
-            drop,
-            stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
-            target,
-        });
+        (q.error(target), target)
     }
 }
 

@@ -14,8 +14,9 @@
 //!   [`Patch`] (the faces before and after), which can refuse it; rfta's refuses any collapse
 //!   that moves the surface across a sample or deeper into a sample's sphere.
 //!
-//! It stops at [`Options::max_faces`] or when no collapse passes. Single-threaded and
-//! deterministic: the same mesh and options give the same output.
+//! It stops at [`Options::max_faces`] or when no collapse passes. The cheapest collapses are
+//! tried in batches on rayon's threads; the output does not depend on their number: the same
+//! mesh, options and judge give the same output.
 //!
 //! # Example
 //! ```
@@ -25,7 +26,7 @@
 //! // A finely tessellated ball of radius 1, kept within 0.01 of itself.
 //! let ball = shapes::icosphere(1.0, 5);
 //! let options = Options { tolerance: 0.01, max_faces: None };
-//! let out = simplify(&ball, &options, &mut |_: &rfta_simplify::Patch<'_>| true)?;
+//! let out = simplify(&ball, &options, &|_: &rfta_simplify::Patch<'_>| true)?;
 //! assert!(out.mesh.n_faces() * 4 < ball.n_faces(), "{} faces", out.mesh.n_faces());
 //! assert!(out.largest_deviation <= 0.01);
 //! assert!(out.mesh.vertices.iter().all(|v| (v.length() - 1.0).abs() <= 0.01 + 1e-12));
@@ -52,14 +53,15 @@ pub struct Options {
     pub max_faces: Option<usize>,
 }
 
-/// The caller's say over each collapse.
-pub trait Judge {
+/// The caller's say over each collapse. It is asked from several threads at once, about
+/// collapses that share no vertex, and must answer from the patch alone.
+pub trait Judge: Sync {
     /// Whether the collapse that turns `patch.before` into `patch.after` may be made.
-    fn allows(&mut self, patch: &Patch<'_>) -> bool;
+    fn allows(&self, patch: &Patch<'_>) -> bool;
 }
 
-impl<F: FnMut(&Patch<'_>) -> bool> Judge for F {
-    fn allows(&mut self, patch: &Patch<'_>) -> bool {
+impl<F: Fn(&Patch<'_>) -> bool + Sync> Judge for F {
+    fn allows(&self, patch: &Patch<'_>) -> bool {
         self(patch)
     }
 }
@@ -97,7 +99,7 @@ pub enum Error {
 /// # Errors
 /// [`Error::Tolerance`] for a negative or NaN tolerance, [`Error::Invalid`] for an invalid mesh,
 /// [`Error::Mesh`] for one that cannot be indexed.
-pub fn simplify(mesh: &TriMesh, options: &Options, judge: &mut dyn Judge) -> Result<Simplified, Error> {
+pub fn simplify(mesh: &TriMesh, options: &Options, judge: &dyn Judge) -> Result<Simplified, Error> {
     if options.tolerance.is_nan() || options.tolerance < 0.0 {
         return Err(Error::Tolerance(options.tolerance));
     }

@@ -115,10 +115,11 @@ pub struct Params {
     /// mesh keeps its topology ([`rfta_simplify`]). `false` returns the repaired mesh as it is.
     pub simplify: bool,
     /// How far, in sample spacings, the simplified surface may lie from the unsimplified one
-    /// (`None`: `SIMPLIFY_TOLERANCE` (0.05), or no limit when [`Params::faces`] is set).
+    /// (`None`: `SIMPLIFY_TOLERANCE` (0.05), or one spacing when [`Params::faces`] is set: a
+    /// budget of faces may cost accuracy, not what the samples resolve).
     pub simplify_tolerance: Option<f64>,
-    /// Simplify to at most this many faces, as far as the samples and the topology allow
-    /// (`None`: as far as the tolerance allows).
+    /// Simplify to at most this many faces, as far as the samples, the topology and the
+    /// tolerance allow (`None`: as far as they allow).
     pub faces: Option<usize>,
 }
 
@@ -367,13 +368,12 @@ impl Params {
         self.batch_size == 0 || self.batch_size >= n
     }
 
-    /// The simplification's tolerance in sample spacings ([`Params::simplify_tolerance`]);
-    /// `None`: no limit.
-    pub(crate) fn simplify_tolerance_spacings(&self) -> Option<f64> {
+    /// The simplification's tolerance in sample spacings ([`Params::simplify_tolerance`]).
+    pub(crate) fn simplify_tolerance_spacings(&self) -> f64 {
         match (self.simplify_tolerance, self.faces) {
-            (Some(t), _) => Some(t),
-            (None, Some(_)) => None,
-            (None, None) => Some(crate::finish::SIMPLIFY_TOLERANCE),
+            (Some(t), _) => t,
+            (None, Some(_)) => 1.0,
+            (None, None) => crate::finish::SIMPLIFY_TOLERANCE,
         }
     }
 

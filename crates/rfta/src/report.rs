@@ -242,8 +242,8 @@ pub struct FinalSolveReport {
 /// What the simplification did ([`crate::Params::simplify`]).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SimplifyReport {
-    /// Faces of the repaired mesh, before simplification (the output's own count is
-    /// [`MeshCheck`]'s).
+    /// Faces of the repaired mesh, before simplification (the same as the output's when it is
+    /// off).
     #[serde(rename = "faces_unsimplified")]
     pub faces_before: usize,
     /// The largest distance measured between the simplified and the unsimplified surface, in

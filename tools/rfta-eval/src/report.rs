@@ -22,6 +22,8 @@ pub(crate) struct Row {
     pub(crate) genus: Option<i64>,
     pub(crate) gt_genus: Option<i64>,
     pub(crate) components: usize,
+    /// The mesh's faces.
+    pub(crate) faces: usize,
     /// Components facing inward (`rfta_mesh::cavities`), and the ground truth's.
     pub(crate) cavities: usize,
     pub(crate) gt_cavities: usize,
@@ -107,7 +109,7 @@ pub(crate) fn reference_method(m: &str) -> String {
 
 pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,cavities,gt_cavities,sign_errors,entered,gaps,deepest_entry,thin_loops,status\n",
+        "shape,n,method,seconds,cpu_seconds,chamfer,hausdorff,e_sdf,watertight,genus,gt_genus,components,faces,cavities,gt_cavities,sign_errors,entered,gaps,deepest_entry,thin_loops,status\n",
     );
     for r in rows {
         let g = |v: Option<i64>| v.map(|g| g.to_string()).unwrap_or_default();
@@ -115,7 +117,7 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             |f: fn(&rfta::Consistency) -> String| r.consistency.as_ref().map(f).unwrap_or_default();
         writeln!(
             s,
-            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{:.6},{:.3},{:.6},{:.6},{:.6},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.shape,
             r.n,
             r.method,
@@ -128,6 +130,7 @@ pub(crate) fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             g(r.genus),
             g(r.gt_genus),
             r.components,
+            r.faces,
             r.cavities,
             r.gt_cavities,
             c(|c| c.sign_errors.to_string()),
@@ -323,14 +326,15 @@ pub(crate) fn write_markdown(
             )?;
         }
     }
+    write_faces(&mut s, rows, methods, res)?;
     writeln!(s, "\n## Per shape\n")?;
     writeln!(
         s,
-        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | cavities (GT) | wrong side / entered / thin loops | status |"
+        "| shape | N | method | seconds | Chamfer | reference | Hausdorff | E_SDF | watertight | genus (GT) | components | faces | cavities (GT) | wrong side / entered / thin loops | status |"
     )?;
     writeln!(
         s,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
     for r in rows {
         let refc = reference
@@ -344,7 +348,7 @@ pub(crate) fn write_markdown(
             .unwrap_or_else(|| "-".into());
         writeln!(
             s,
-            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} ({}) | {} | {} |",
+            "| {} | {} | {} | {:.3} | {:.5} | {refc} | {:.5} | {:.4} | {} | {g} ({gt}) | {} | {} | {} ({}) | {} | {} |",
             r.shape,
             r.n,
             r.method,
@@ -354,6 +358,7 @@ pub(crate) fn write_markdown(
             r.e_sdf,
             r.watertight,
             r.components,
+            r.faces,
             r.cavities,
             r.gt_cavities,
             r.consistency
@@ -372,6 +377,40 @@ pub(crate) fn write_markdown(
 }
 
 /// Agreement with the samples and with the ground truth's topology, per N and method.
+/// The median faces per shape of each method at each N, beside marching cubes'.
+fn write_faces(s: &mut String, rows: &[Row], methods: &[String], res: &[usize]) -> Result<()> {
+    writeln!(s, "\n## Faces\n")?;
+    writeln!(
+        s,
+        "Median faces per shape, and that median over marching cubes' on the same grids.\n"
+    )?;
+    writeln!(s, "| N | method | median faces | ratio to mc |\n|---|---|---|---|")?;
+    let median = |n: usize, m: &str| {
+        let mut f: Vec<usize> = rows
+            .iter()
+            .filter(|r| r.n == n && r.method == m && r.status == "ok")
+            .map(|r| r.faces)
+            .collect();
+        f.sort_unstable();
+        match f.len() {
+            0 => None,
+            k if k % 2 == 1 => Some(f[k / 2] as f64),
+            k => Some(0.5 * (f[k / 2 - 1] + f[k / 2]) as f64),
+        }
+    };
+    for &n in res {
+        let mc = median(n, "mc");
+        for m in methods {
+            let Some(faces) = median(n, m) else { continue };
+            let ratio = mc
+                .filter(|&b| b > 0.0)
+                .map_or_else(|| "n/a".into(), |b| format!("{:.2}", faces / b));
+            writeln!(s, "| {n} | {m} | {faces:.0} | {ratio} |")?;
+        }
+    }
+    Ok(())
+}
+
 fn write_consistency(
     s: &mut String,
     rows: &[Row],

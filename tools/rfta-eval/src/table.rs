@@ -13,9 +13,17 @@ use crate::report::{self, Row};
 use crate::shapes::{Shape, Source, grid_for};
 use crate::{chart, render};
 
-/// The methods `--methods` takes; all but the last run without it. `rfta-genus` is the default
-/// preset told the ground truth's genus (`rfta::Params::genus`), as a user who knows it would.
-const METHODS: [&str; 5] = ["mc", "rfta", "rfta-default", "rfta-paper", "rfta-genus"];
+/// The methods `--methods` takes; the first four run without it. `rfta-genus` is the default
+/// preset told the ground truth's genus (`rfta::Params::genus`), as a user who knows it would;
+/// `rfta-default-unsimplified` the default's mesh before simplification.
+const METHODS: [&str; 6] = [
+    "mc",
+    "rfta",
+    "rfta-default",
+    "rfta-paper",
+    "rfta-genus",
+    "rfta-default-unsimplified",
+];
 
 /// `cargo xtask eval [table]`'s arguments.
 #[derive(Debug, Clone, clap::Args)]
@@ -26,7 +34,8 @@ pub(crate) struct Args {
     #[arg(long, value_delimiter = ',', default_value = "10,20,30", value_parser = clap::value_parser!(usize))]
     pub(crate) res: Vec<usize>,
     /// Methods: mc, rfta (fast preset), rfta-default, rfta-paper, rfta-genus (the default preset
-    /// told the ground truth's genus; not run unless named).
+    /// told the ground truth's genus) and rfta-default-unsimplified (the default's mesh before
+    /// simplification); the last two run only when named.
     #[arg(long, value_delimiter = ',', default_value = "mc,rfta,rfta-default,rfta-paper",
           value_parser = clap::builder::PossibleValuesParser::new(METHODS))]
     pub(crate) methods: Vec<String>,
@@ -75,6 +84,9 @@ pub(crate) struct Tuning {
     /// Keep the cavities the samples leave open.
     #[arg(long)]
     keep_cavities: bool,
+    /// How far the simplified surface may lie from the unsimplified one, in sample spacings.
+    #[arg(long, value_name = "SPACINGS")]
+    simplify_tolerance: Option<f64>,
 }
 
 impl Tuning {
@@ -93,6 +105,7 @@ impl Tuning {
         put("seed", self.seed.map(Into::into));
         put("initial", self.initial.clone().map(Into::into));
         put("keep_cavities", self.keep_cavities.then_some(true.into()));
+        put("simplify_tolerance", self.simplify_tolerance.map(Into::into));
         m
     }
 }
@@ -140,6 +153,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                     genus: None,
                     gt_genus: None,
                     components: 0,
+                    faces: 0,
                     cavities: 0,
                     gt_cavities: 0,
                     consistency: None,
@@ -200,6 +214,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                             genus: s.genus,
                             gt_genus: gt_summary.genus,
                             components: s.components,
+                            faces: mesh.n_faces(),
                             cavities: s.cavities,
                             gt_cavities: gt_summary.cavities,
                             consistency: Some(consistency),
@@ -297,6 +312,7 @@ fn failed_row(
         genus: None,
         gt_genus,
         components: 0,
+        faces: 0,
         cavities: 0,
         gt_cavities: 0,
         consistency: None,
@@ -314,7 +330,7 @@ fn run_method(
 ) -> Result<TriMesh, String> {
     match method {
         "mc" => Ok(rfta_mc::marching_cubes(grid, values, 0.0)),
-        "rfta" | "rfta-default" | "rfta-paper" | "rfta-genus" => {
+        "rfta" | "rfta-default" | "rfta-paper" | "rfta-genus" | "rfta-default-unsimplified" => {
             // `rfta-genus` is the default preset told the genus; the others name their preset.
             let base = match method {
                 "rfta-genus" => rfta::Params {

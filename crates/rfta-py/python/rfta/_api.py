@@ -329,8 +329,8 @@ def reconstruct(
         By default the mesh is simplified: edges collapsed while the surface stays within
         ``simplify_tolerance`` sample spacings (default 0.05) of the unsimplified one, no sample
         changes side, no sphere is entered past the consistency check's margin and the topology
-        stays the same; ``faces`` asks for at most that many faces (without a tolerance unless
-        one is given). ``simplify=False`` returns the mesh unsimplified (``rfta reconstruct
+        stays the same; ``faces`` asks for at most that many faces (within one spacing unless
+        a tolerance is given). ``simplify=False`` returns the mesh unsimplified (``rfta reconstruct
         --no-simplify``). ``report["faces_unsimplified"]`` and ``report["simplify_deviation"]``
         (spacings) say what it did.
     check : bool

@@ -52,13 +52,13 @@ pub(crate) fn simplify(
     }
     let t = Instant::now();
     let h = spacing;
-    let tolerance = params.simplify_tolerance_spacings().map_or(f64::INFINITY, |k| k * h);
-    let mut judge = SampleJudge::new(plan, &mesh, h, tolerance)?;
+    let tolerance = params.simplify_tolerance_spacings() * h;
+    let judge = SampleJudge::new(plan, &mesh, h, tolerance)?;
     let options = Options {
         tolerance,
         max_faces: params.faces,
     };
-    let out = rfta_simplify::simplify(&mesh, &options, &mut judge).map_err(|e| match e {
+    let out = rfta_simplify::simplify(&mesh, &options, &judge).map_err(|e| match e {
         rfta_simplify::Error::Mesh(e) => crate::Error::Consistency(e),
         other => crate::Error::InvalidParams(other.to_string()),
     })?;
@@ -78,7 +78,6 @@ struct SampleJudge {
     /// Whether each sphere is a constraint (distances; not a level set's).
     spheres_bind: bool,
     slack: f64,
-    hits: Vec<u32>,
 }
 
 impl SampleJudge {
@@ -143,7 +142,6 @@ impl SampleJudge {
             sided,
             spheres_bind: !plan.field.level_set,
             slack,
-            hits: Vec::new(),
         })
     }
 }
@@ -156,19 +154,19 @@ fn cells_of(lo: DVec3, hi: DVec3, size: f64) -> impl Iterator<Item = [i64; 3]> {
 }
 
 impl Judge for SampleJudge {
-    fn allows(&mut self, patch: &Patch<'_>) -> bool {
+    fn allows(&self, patch: &Patch<'_>) -> bool {
         let (centre, radius) = patch.bounding_ball();
         let corners = || patch.before.iter().chain(patch.after).flatten();
         let (lo, hi) = corners().fold((centre, centre), |(lo, hi), &x| (lo.min(x), hi.max(x)));
-        self.hits.clear();
+        let mut hits = Vec::new();
         for key in cells_of(lo, hi, self.cell) {
             if let Some(ids) = self.cells.get(&key) {
-                self.hits.extend_from_slice(ids);
+                hits.extend_from_slice(ids);
             }
         }
-        self.hits.sort_unstable();
-        self.hits.dedup();
-        if self.hits.is_empty() {
+        hits.sort_unstable();
+        hits.dedup();
+        if hits.is_empty() {
             return true;
         }
         // The slab around the patch's mean plane that holds both fans: a sample outside it is
@@ -183,7 +181,7 @@ impl Judge for SampleJudge {
         let (lo, hi) = corners().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
                 (lo.min(height(x)), hi.max(height(x)))
             });
-        self.hits.iter().all(|&j| {
+        hits.iter().all(|&j| {
             let s = &self.spheres[j as usize];
             let p: DVec3 = s.center;
             let z = height(p);
