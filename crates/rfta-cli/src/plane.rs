@@ -110,6 +110,14 @@ pub(crate) fn reconstruct(
             r.holes_opened
         ));
     }
+    if r.edges_unsimplified > out.curve.edges.len() {
+        ui.detail(format!(
+            "simplified {} edges to {}, at most {:.3} sample spacings from the curve before, every sample's side and circle kept (--no-simplify keeps them all)",
+            r.edges_unsimplified,
+            out.curve.edges.len(),
+            r.simplify_deviation
+        ));
+    }
     rfta_io::write_polylines(output, &out.curve)?;
     ui.say(format!("wrote {}", output.display()));
     if let Some(path) = extras.report {

@@ -44,6 +44,7 @@ mod islands;
 mod params;
 mod pipeline;
 pub mod raster;
+mod simplify;
 pub mod spsr;
 
 pub use params::{Error, PlaneParams, Result};

@@ -25,6 +25,14 @@ pub struct PlaneParams {
     pub min_island: f64,
     /// Keep the holes around outside samples that the samples leave open.
     pub keep_cavities: bool,
+    /// Simplify the final curve: vertices on nearly straight runs removed while every sample
+    /// keeps its side and no circle is entered past the margin.
+    pub simplify: bool,
+    /// How far the simplified curve may lie from the unsimplified one, in sample spacings
+    /// (`None`: [`rfta_simplify::default_tolerance`]).
+    pub simplify_tolerance: Option<f64>,
+    /// Simplify to at most this many edges (`None`: as far as the tolerance allows).
+    pub max_edges: Option<usize>,
 }
 
 impl Default for PlaneParams {
@@ -40,6 +48,9 @@ impl Default for PlaneParams {
             owner_band: Some(3.0),
             min_island: 2.0,
             keep_cavities: false,
+            simplify: true,
+            simplify_tolerance: None,
+            max_edges: None,
         }
     }
 }

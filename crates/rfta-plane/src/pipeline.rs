@@ -69,6 +69,11 @@ pub struct Report2 {
     /// show), or kept by [`PlaneParams::keep_cavities`] or for want of a channel that enters no
     /// circle.
     pub holes: usize,
+    /// Edges of the curve before simplification ([`PlaneParams::simplify`]).
+    pub edges_unsimplified: usize,
+    /// The largest distance measured between the simplified and the unsimplified curve, in
+    /// sample spacings (0 without simplification).
+    pub simplify_deviation: f64,
     /// Seconds, whole reconstruction.
     pub seconds: f64,
 }
@@ -164,6 +169,27 @@ pub fn reconstruct(samples: &SdfSamples2, params: &PlaneParams) -> Result<Recons
             Err(_) => crate::holes::Opened::default(),
         }
     });
+    let simplified = if params.simplify {
+        let per_axis = extent.max_element() / spacing;
+        let tolerance = params
+            .simplify_tolerance
+            .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis));
+        let (simpler, done) = crate::simplify::simplify(
+            curve,
+            &circles,
+            &values,
+            spacing,
+            tolerance,
+            params.max_edges,
+        );
+        curve = simpler;
+        done
+    } else {
+        crate::simplify::Simplified {
+            edges_before: curve.edges.len(),
+            deviation: 0.0,
+        }
+    };
     for v in &mut curve.vertices {
         *v = *v * scale + lo;
     }
@@ -181,6 +207,8 @@ pub fn reconstruct(samples: &SdfSamples2, params: &PlaneParams) -> Result<Recons
         islands_removed: islands,
         holes_opened: holes.as_ref().map_or(0, |h| h.opened),
         holes: holes.as_ref().map_or(0, |h| h.kept),
+        edges_unsimplified: simplified.edges_before,
+        simplify_deviation: simplified.deviation,
         seconds: start.elapsed().as_secs_f64(),
     };
     Ok(Reconstruction2 {

@@ -254,10 +254,7 @@ impl Queue {
     /// The error of collapsing `keep` and `drop`, and where the vertex goes.
     fn price(&self, mesh: &Editable, keep: u32, drop: u32) -> (f64, DVec3) {
         let q = self.quadrics[keep as usize].add(&self.quadrics[drop as usize]);
-        let (pk, pd) = (
-            mesh.positions[keep as usize],
-            mesh.positions[drop as usize],
-        );
+        let (pk, pd) = (mesh.positions[keep as usize], mesh.positions[drop as usize]);
         let mid = 0.5 * (pk + pd);
         // The minimizer, unless it lies farther from the edge's midpoint than the edge is long
         // (a nearly singular quadric's far-off point); else the best of the ends and the midpoint.
@@ -296,7 +293,8 @@ fn keeps_shape(change: &Change) -> bool {
 /// one.
 fn quality(t: &[DVec3; 3]) -> f64 {
     let twice_area = (t[1] - t[0]).cross(t[2] - t[0]).length();
-    let edges = t[0].distance_squared(t[1]) + t[1].distance_squared(t[2]) + t[2].distance_squared(t[0]);
+    let edges =
+        t[0].distance_squared(t[1]) + t[1].distance_squared(t[2]) + t[2].distance_squared(t[0]);
     if edges > 0.0 {
         2.0 * 3f64.sqrt() * twice_area / edges
     } else {

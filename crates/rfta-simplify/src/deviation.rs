@@ -7,9 +7,9 @@
 //! control", 1996). Output to input: each collapse's new vertex must lie within the tolerance of
 //! the input surface. The largest distance either way is kept.
 
+use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 use rfta_geom::kernels::closest_point_on_triangle;
-use rfta_geom::TriMesh;
 use rfta_mesh::MeshIndex;
 
 use crate::editable::Change;

@@ -152,13 +152,14 @@ impl Editable {
         self.neighbours(a, na);
         self.neighbours(b, nb);
         let common = na.iter().filter(|x| nb.binary_search(x).is_ok()).count();
-        if common != 2 || c == d || na.binary_search(&c).is_err() || na.binary_search(&d).is_err()
-        {
+        if common != 2 || c == d || na.binary_search(&c).is_err() || na.binary_search(&d).is_err() {
             return false;
         }
         // The merged vertex has |na| + |nb| - 4 neighbours (a, b and the two shared ones go);
         // c and d lose one each.
-        na.len() + nb.len() >= 7 && self.incident[c as usize].len() > 3 && self.incident[d as usize].len() > 3
+        na.len() + nb.len() >= 7
+            && self.incident[c as usize].len() > 3
+            && self.incident[d as usize].len() > 3
     }
 
     /// The faces collapsing `b` into `a` at `target` changes, into `change`.

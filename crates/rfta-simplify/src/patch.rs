@@ -21,10 +21,7 @@ impl Patch<'_> {
     /// nonzero. Points on either fan have no defined answer.
     pub fn sweeps(&self, p: DVec3) -> bool {
         let omega = |faces: &[[DVec3; 3]]| -> f64 {
-            faces
-                .iter()
-                .map(|t| solid_angle(p, t[0], t[1], t[2]))
-                .sum()
+            faces.iter().map(|t| solid_angle(p, t[0], t[1], t[2])).sum()
         };
         let winding = (omega(self.before) - omega(self.after)) / (4.0 * std::f64::consts::PI);
         winding.abs() > 0.5
@@ -107,6 +104,11 @@ mod tests {
         assert!((patch.distance_before(p) - 1.0).abs() < 1e-12);
         assert!((patch.distance_after(p) - 2.0).abs() < 1e-12);
         let (centre, radius) = patch.bounding_ball();
-        assert!(before.iter().flatten().all(|c| c.distance(centre) <= radius + 1e-12));
+        assert!(
+            before
+                .iter()
+                .flatten()
+                .all(|c| c.distance(centre) <= radius + 1e-12)
+        );
     }
 }

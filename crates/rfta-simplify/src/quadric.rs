@@ -133,8 +133,11 @@ mod tests {
     #[test]
     fn a_crease_keeps_the_nearest_point_on_its_line() {
         // Planes x = 0 and y = 0 meet along the z axis.
-        let q = Quadric::plane(DVec3::ZERO, DVec3::X, 1.0)
-            .add(&Quadric::plane(DVec3::ZERO, DVec3::Y, 1.0));
+        let q = Quadric::plane(DVec3::ZERO, DVec3::X, 1.0).add(&Quadric::plane(
+            DVec3::ZERO,
+            DVec3::Y,
+            1.0,
+        ));
         let x = q.minimizer(DVec3::new(0.2, 0.1, 0.8)).expect("regularized");
         assert!(x.distance(DVec3::new(0.0, 0.0, 0.8)) < 1e-5, "{x}");
     }

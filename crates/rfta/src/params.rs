@@ -114,9 +114,11 @@ pub struct Params {
     /// keeps its side, no sphere is entered deeper than the consistency check allows, and the
     /// mesh keeps its topology ([`rfta_simplify`]). `false` returns the repaired mesh as it is.
     pub simplify: bool,
-    /// How far, in sample spacings, the simplified surface may lie from the unsimplified one
-    /// (`None`: `SIMPLIFY_TOLERANCE` (0.05), or one spacing when [`Params::faces`] is set: a
-    /// budget of faces may cost accuracy, not what the samples resolve).
+    /// How far, in sample spacings, the simplified surface may lie from the unsimplified one.
+    /// `None`: [`rfta_simplify::default_tolerance`], `0.8 h / L` spacings (`h` the spacing, `L`
+    /// the samples' longest extent: 0.08 at N = 10, 0.016 at N = 50), or one spacing when
+    /// [`Params::faces`] is set (a budget of faces may cost accuracy, not what the samples
+    /// resolve).
     pub simplify_tolerance: Option<f64>,
     /// Simplify to at most this many faces, as far as the samples, the topology and the
     /// tolerance allow (`None`: as far as they allow).
@@ -187,6 +189,9 @@ pub(crate) const OWNER_BAND: f64 = 3.0;
 /// With an owner band, only spheres smaller than this many owner radii are rasterized for the
 /// empty space: a far sphere only fills what lies between nearer ones (docs/speed.md).
 pub(crate) const RASTER_REACH: f64 = 3.0;
+
+/// The simplification's tolerance, in sample spacings, when only [`Params::faces`] is given.
+const FACES_TOLERANCE: f64 = 1.0;
 
 /// The box of the Poisson solves, in unit boxes (the reference's `point_cloud_to_mesh`).
 const SPSR_BOX: f64 = 3.2;
@@ -368,13 +373,12 @@ impl Params {
         self.batch_size == 0 || self.batch_size >= n
     }
 
-    /// The simplification's tolerance in sample spacings ([`Params::simplify_tolerance`]).
-    pub(crate) fn simplify_tolerance_spacings(&self) -> f64 {
-        match (self.simplify_tolerance, self.faces) {
-            (Some(t), _) => t,
-            (None, Some(_)) => 1.0,
-            (None, None) => crate::finish::SIMPLIFY_TOLERANCE,
-        }
+    /// The simplification's tolerance in sample spacings when it does not depend on the samples
+    /// ([`Params::simplify_tolerance`], or one spacing for [`Params::faces`]); `None`: the
+    /// default for the samples' size, [`rfta_simplify::default_tolerance`].
+    pub(crate) fn simplify_tolerance_set(&self) -> Option<f64> {
+        self.simplify_tolerance
+            .or_else(|| self.faces.map(|_| FACES_TOLERANCE))
     }
 
     pub(crate) fn validate(&self) -> Result<()> {

@@ -26,7 +26,9 @@ use crate::{Error, Params, Result};
 /// Uses [`Params::rounds`], [`Params::max_points_per_sphere`], [`Params::transport_step`],
 /// [`Params::tolerance`], [`Params::raster_resolution`], [`Params::clamp`], [`Params::spsr_depth`]
 /// (the quadtree's depth; default from the sample spacing), [`Params::owner_band`],
-/// [`Params::min_island`], [`Params::keep_cavities`], [`Params::check`] and [`Params::threads`].
+/// [`Params::min_island`], [`Params::keep_cavities`], [`Params::simplify`],
+/// [`Params::simplify_tolerance`], [`Params::faces`] (as the most edges), [`Params::check`] and
+/// [`Params::threads`].
 ///
 /// # Errors
 /// [`Error::InvalidParams`] (also when [`Params::genus`] is given), [`Error::NotADistance`],
@@ -66,6 +68,9 @@ fn plane_params(params: &Params) -> PlaneParams {
         owner_band: params.owner_band,
         min_island: params.min_island,
         keep_cavities: params.keep_cavities,
+        simplify: params.simplify,
+        simplify_tolerance: params.simplify_tolerance_set(),
+        max_edges: params.faces,
     }
 }
 

@@ -246,6 +246,9 @@ pub struct SimplifyReport {
     /// off).
     #[serde(rename = "faces_unsimplified")]
     pub faces_before: usize,
+    /// Faces after it (not serialized: the output's count is the mesh's own).
+    #[serde(skip)]
+    pub faces_after: usize,
     /// The largest distance measured between the simplified and the unsimplified surface, in
     /// sample spacings (0 without simplification).
     #[serde(rename = "simplify_deviation")]
@@ -357,6 +360,13 @@ impl Report {
                 "opened {} cavit{} the surface had sealed around outside samples (a gap or a hole the samples leave open)",
                 r.cavities_opened,
                 if r.cavities_opened == 1 { "y" } else { "ies" }
+            ));
+        }
+        let s = &self.simplify;
+        if s.faces_after < s.faces_before {
+            out.push(format!(
+                "simplified {} faces to {}, at most {:.3} sample spacings from the surface before (measured at the vertices), every sample's side and sphere kept",
+                s.faces_before, s.faces_after, s.largest_deviation
             ));
         }
         out

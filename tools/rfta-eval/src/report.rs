@@ -384,7 +384,10 @@ fn write_faces(s: &mut String, rows: &[Row], methods: &[String], res: &[usize]) 
         s,
         "Median faces per shape, and that median over marching cubes' on the same grids.\n"
     )?;
-    writeln!(s, "| N | method | median faces | ratio to mc |\n|---|---|---|---|")?;
+    writeln!(
+        s,
+        "| N | method | median faces | ratio to mc |\n|---|---|---|---|"
+    )?;
     let median = |n: usize, m: &str| {
         let mut f: Vec<usize> = rows
             .iter()

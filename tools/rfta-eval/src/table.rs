@@ -105,7 +105,10 @@ impl Tuning {
         put("seed", self.seed.map(Into::into));
         put("initial", self.initial.clone().map(Into::into));
         put("keep_cavities", self.keep_cavities.then_some(true.into()));
-        put("simplify_tolerance", self.simplify_tolerance.map(Into::into));
+        put(
+            "simplify_tolerance",
+            self.simplify_tolerance.map(Into::into),
+        );
         m
     }
 }

@@ -85,6 +85,11 @@ fn every_reconstruct_option_reaches_the_rows() {
         "raster",
         "--field",
         "level-set",
+        "--no-simplify",
+        "--simplify-tolerance",
+        "0.1",
+        "--faces",
+        "500",
     ])
     .expect("options");
     let mut given: Vec<String> = cli.args.checks.to_args(None);
@@ -105,6 +110,8 @@ fn every_reconstruct_option_reaches_the_rows() {
         ["--rounds", "4"],
         ["--preset", "paper"],
         ["--max-memory", "2147483648B"],
+        ["--faces", "500"],
+        ["--simplify-tolerance", "0.1"],
     ] {
         assert!(given.windows(2).any(|w| w == pair), "{pair:?} in {given:?}");
     }

@@ -327,7 +327,8 @@ def reconstruct(
         (as MISE does) and its finest grid read as one.
     simplify, simplify_tolerance, faces
         By default the mesh is simplified: edges collapsed while the surface stays within
-        ``simplify_tolerance`` sample spacings (default 0.05) of the unsimplified one, no sample
+        ``simplify_tolerance`` sample spacings (default 0.8 / N for samples N spacings
+        across) of the unsimplified one, no sample
         changes side, no sphere is entered past the consistency check's margin and the topology
         stays the same; ``faces`` asks for at most that many faces (within one spacing unless
         a tolerance is given). ``simplify=False`` returns the mesh unsimplified (``rfta reconstruct

@@ -30,11 +30,11 @@ use crate::{
 };
 
 use islands::{inverted_and_unenclosed, judge};
-pub(crate) use simplify::{SIMPLIFY_TOLERANCE, simplify};
 use rfta_repair::{
     CUT_GAP, Island, clear_spheres, cut_sub_cell_handles, dent_wrong_side, push_out_of_spheres,
     remove_islands, to_genus,
 };
+pub(crate) use simplify::simplify;
 
 /// Vertices inside a sphere by more than this many sample spacings move out of it: a fifth of the
 /// margin at which the consistency check ([`crate::consistency`]) counts a sphere as entered, and

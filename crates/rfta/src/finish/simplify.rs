@@ -29,10 +29,6 @@ const ENTER_SLACK: f64 = 0.8 * ENTER_MARGIN;
 /// sample is watched when it is within this many tolerances of being touched.
 const WATCH: f64 = 1.2;
 
-/// The default [`crate::Params::simplify_tolerance`]: the simplified surface stays within this
-/// many sample spacings of the unsimplified one (chosen by measurement, docs/eval/README.md).
-pub(crate) const SIMPLIFY_TOLERANCE: f64 = 0.05;
-
 /// `mesh` (the samples' coordinates) simplified as [`crate::Params`] say, its tolerance and
 /// margins in units of `spacing` (the samples' own, or where the surface is, an adaptive run's
 /// finest), with its report; the mesh as it is when simplification is off.
@@ -45,6 +41,7 @@ pub(crate) fn simplify(
     let params = &plan.params;
     let mut report = SimplifyReport {
         faces_before: mesh.n_faces(),
+        faces_after: mesh.n_faces(),
         ..SimplifyReport::default()
     };
     if !params.simplify || mesh.n_faces() == 0 {
@@ -52,7 +49,11 @@ pub(crate) fn simplify(
     }
     let t = Instant::now();
     let h = spacing;
-    let tolerance = params.simplify_tolerance_spacings() * h;
+    let per_axis = plan.unit.to_input_length(1.0) / h;
+    let spacings = params
+        .simplify_tolerance_set()
+        .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis));
+    let tolerance = spacings * h;
     let judge = SampleJudge::new(plan, &mesh, h, tolerance)?;
     let options = Options {
         tolerance,
@@ -63,6 +64,7 @@ pub(crate) fn simplify(
         other => crate::Error::InvalidParams(other.to_string()),
     })?;
     report.largest_deviation = out.largest_deviation / h;
+    report.faces_after = out.mesh.n_faces();
     journal.timed(Step::Simplify, t);
     Ok((out.mesh, report))
 }
@@ -150,7 +152,8 @@ impl SampleJudge {
 fn cells_of(lo: DVec3, hi: DVec3, size: f64) -> impl Iterator<Item = [i64; 3]> {
     let key = |x: DVec3| (x / size).floor().as_i64vec3();
     let (a, b) = (key(lo), key(hi));
-    (a.x..=b.x).flat_map(move |x| (a.y..=b.y).flat_map(move |y| (a.z..=b.z).map(move |z| [x, y, z])))
+    (a.x..=b.x)
+        .flat_map(move |x| (a.y..=b.y).flat_map(move |y| (a.z..=b.z).map(move |z| [x, y, z])))
 }
 
 impl Judge for SampleJudge {
@@ -179,8 +182,8 @@ impl Judge for SampleJudge {
             .normalize_or_zero();
         let height = |x: DVec3| normal.dot(x - centre);
         let (lo, hi) = corners().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-                (lo.min(height(x)), hi.max(height(x)))
-            });
+            (lo.min(height(x)), hi.max(height(x)))
+        });
         hits.iter().all(|&j| {
             let s = &self.spheres[j as usize];
             let p: DVec3 = s.center;
@@ -201,4 +204,3 @@ impl Judge for SampleJudge {
         })
     }
 }
-
