@@ -116,9 +116,9 @@ pub struct Params {
     pub simplify: bool,
     /// How far, in sample spacings, the simplified surface may lie from the unsimplified one.
     /// `None`: [`rfta_simplify::default_tolerance`], `0.8 h / L` spacings (`h` the spacing, `L`
-    /// the samples' longest extent: 0.08 at N = 10, 0.016 at N = 50), or one spacing when
-    /// [`Params::faces`] is set (a budget of faces may cost accuracy, not what the samples
-    /// resolve).
+    /// the samples' longest extent: 0.04 at N = 20, 0.016 at N = 50) and at most 0.06, or one
+    /// spacing when [`Params::faces`] is set (a budget of faces may cost accuracy, not what the
+    /// samples resolve).
     pub simplify_tolerance: Option<f64>,
     /// Simplify to at most this many faces, as far as the samples, the topology and the
     /// tolerance allow (`None`: as far as they allow).
