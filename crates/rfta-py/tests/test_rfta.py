@@ -559,3 +559,25 @@ def test_a_callable_may_answer_with_a_tensor_on_any_device():
     r = rfta.reconstruct(sdf=sdf, bounds=(-1, 1), budget=2000)
     assert r.adaptive["evaluations"] == sum(asked) <= 2000
     assert r.report["components"] == 1 and r.report["genus"] == 0
+
+
+def test_the_mesh_is_simplified_unless_asked_not_to():
+    S = torus_sdf(grid(20))
+    full = rfta.reconstruct(S, simplify=False)
+    r = rfta.reconstruct(S)
+    # Same topology, far fewer faces, the unsimplified count in the report.
+    assert r.report["faces_unsimplified"] == len(full.faces) > 4 * len(r.faces)
+    assert (r.report["genus"], r.report["components"]) == (1, 1)
+    assert r.report["sign_errors"] == 0 and r.report["entered"] <= full.report["entered"]
+    # Within the tolerance asked (spacings of 2 / 20) of the unsimplified surface, at the
+    # simplified mesh's vertices, measured on the torus both meshes approximate.
+    tight = rfta.reconstruct(S, simplify_tolerance=0.01)
+    assert tight.report["simplify_deviation"] <= 0.01 + 1e-9
+    assert len(r.faces) < len(tight.faces) < len(full.faces)
+    err = np.abs(torus_sdf(tight.vertices)).max()
+    # (plus the unsimplified faces' own sag between their vertices: under 0.01 spacings here)
+    assert err <= np.abs(torus_sdf(full.vertices)).max() + 0.02 * 2.0 / 20.0
+    budget = rfta.reconstruct(S, faces=400)
+    assert len(budget.faces) <= 400 and budget.report["genus"] == 1
+    with pytest.raises(ValueError, match="simplify_tolerance"):
+        rfta.reconstruct(S, simplify_tolerance=-1.0)

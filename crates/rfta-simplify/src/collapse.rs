@@ -1,12 +1,11 @@
-//! The greedy loop: edges collapsed cheapest first by quadric error, each collapse tried against
-//! the topology, the faces' shape, the tolerance and the caller's judge, in that order.
-
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+//! The greedy loop: edges collapsed cheapest first by quadric error (to the grain of the bucket
+//! queue, `buckets.rs`), each collapse tried against the topology, the faces' shape, the
+//! tolerance and the caller's judge, in that order.
 
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
+use crate::buckets::Buckets;
 use crate::deviation::{Deviation, HandOver};
 use crate::editable::{Change, Editable};
 use crate::quadric::Quadric;
@@ -19,40 +18,14 @@ const MIN_TURN_COS: f64 = 0.5;
 /// for an equilateral triangle), or than the thinnest face it replaces when that is thinner.
 const MIN_QUALITY: f64 = 0.1;
 
-/// An edge in the queue: its collapse's error and the vertices' edit counts when it was priced
-/// (a stale entry is skipped). The target is priced again when the edge is taken: a small entry
-/// keeps the heap, which holds several stale entries per edge, in cache.
+/// An edge in the queue: its vertices and their edit counts when it was priced (a stale entry
+/// is skipped). The target is priced again when the edge is taken: a small entry keeps the
+/// queue, which holds several stale entries per edge, in cache.
 struct Entry {
-    cost: f64,
     keep: u32,
     drop: u32,
     stamps: [u32; 2],
 }
-
-impl Ord for Entry {
-    /// Cheapest first (the heap is a max-heap), ties by vertex ids: the order is total and does
-    /// not depend on the heap's history.
-    fn cmp(&self, o: &Self) -> Ordering {
-        o.cost
-            .total_cmp(&self.cost)
-            .then_with(|| o.keep.cmp(&self.keep))
-            .then_with(|| o.drop.cmp(&self.drop))
-    }
-}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-
-impl PartialEq for Entry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-
-impl Eq for Entry {}
 
 /// Collapses edges while the mesh has more than `max_faces` faces and some collapse passes;
 /// returns the number made.
@@ -74,9 +47,8 @@ pub(crate) fn run(
     let mut collapses = 0;
     let mut round = 0u32;
     while mesh.live_faces > max_faces {
-        let (batch, waiting) = queue.take(mesh, &mut taken_by, round, &mut around);
+        let batch = queue.take(mesh, &mut taken_by, round, &mut around);
         round += 1;
-        queue.heap.extend(waiting);
         if batch.is_empty() {
             break;
         }
@@ -140,26 +112,31 @@ fn try_collapse(
 
 /// The priority queue of edges and what prices them.
 struct Queue {
-    heap: BinaryHeap<Entry>,
+    queue: Buckets<Entry>,
+    /// Edges passed over by the last batch for meeting it, cheapest first.
+    waiting: Vec<Entry>,
     quadrics: Vec<Quadric>,
     stamps: Vec<u32>,
 }
 
 impl Queue {
     /// Up to `BATCH` current edges, cheapest first, whose changes (the vertices of both ends'
-    /// faces) share no vertex, marking those vertices with `round` in `taken_by`; and the
-    /// current edges passed over for meeting one, to queue again (at most `BATCH`: then the
-    /// batch is closed).
+    /// faces) share no vertex, marking those vertices with `round` in `taken_by`. The edges
+    /// passed over for meeting one wait (at most `BATCH`: then the batch is closed) and are the
+    /// first looked at next time, before the queue.
     fn take(
         &mut self,
         mesh: &Editable,
         taken_by: &mut [u32],
         round: u32,
         around: &mut Vec<u32>,
-    ) -> (Vec<(Entry, DVec3)>, Vec<Entry>) {
-        let (mut batch, mut waiting) = (Vec::new(), Vec::new());
+    ) -> Vec<(Entry, DVec3)> {
+        let mut batch = Vec::new();
+        let mut waited = std::mem::take(&mut self.waiting).into_iter();
         while batch.len() < BATCH {
-            let Some(e) = self.heap.pop() else { break };
+            let Some(e) = waited.next().or_else(|| self.queue.pop()) else {
+                break;
+            };
             let (a, b) = (e.keep, e.drop);
             let current = mesh.is_alive(a)
                 && mesh.is_alive(b)
@@ -174,8 +151,8 @@ impl Queue {
                 }
             }
             if around.iter().any(|&v| taken_by[v as usize] == round) {
-                waiting.push(e);
-                if waiting.len() == BATCH {
+                self.waiting.push(e);
+                if self.waiting.len() == BATCH {
                     break;
                 }
                 continue;
@@ -186,7 +163,12 @@ impl Queue {
             let target = self.price(mesh, a, b).1;
             batch.push((e, target));
         }
-        (batch, waiting)
+        // What waited and was not looked at goes back to the queue.
+        for e in waited {
+            let cost = self.price(mesh, e.keep, e.drop).0;
+            self.queue.push(cost, e);
+        }
+        batch
     }
 
     /// Each vertex's quadric is the planes of its faces, weighted by their areas; every edge
@@ -206,7 +188,8 @@ impl Queue {
             }
         }
         let mut queue = Self {
-            heap: BinaryHeap::new(),
+            queue: Buckets::new(),
+            waiting: Vec::new(),
             quadrics,
             stamps: vec![0; n],
         };
@@ -230,20 +213,22 @@ impl Queue {
             return;
         }
         let cost = self.price(mesh, keep, drop).0;
-        self.heap.push(Entry {
+        self.queue.push(
             cost,
-            keep,
-            drop,
-            stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
-        });
+            Entry {
+                keep,
+                drop,
+                stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
+            },
+        );
     }
 
-    /// Drops the stale entries once they are most of the heap (three for each live edge).
+    /// Drops the stale entries once they are most of the queue (three for each live edge).
     fn drop_stale(&mut self, mesh: &Editable) {
         let live_edges = 3 * mesh.live_faces / 2;
-        if self.heap.len() > 4 * live_edges {
+        if self.queue.len() > 4 * live_edges {
             let stamps = &self.stamps;
-            self.heap.retain(|e| {
+            self.queue.retain(|e| {
                 mesh.is_alive(e.keep)
                     && mesh.is_alive(e.drop)
                     && e.stamps == [stamps[e.keep as usize], stamps[e.drop as usize]]

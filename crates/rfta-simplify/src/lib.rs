@@ -36,6 +36,7 @@
 //! # Ok::<(), rfta_simplify::Error>(())
 //! ```
 
+mod buckets;
 mod collapse;
 mod deviation;
 mod editable;

@@ -10,7 +10,9 @@
 //!    ([`feasible::initial_points`]);
 //! 4. and 5. `rounds`: [`Params::rounds`] times, screened Poisson reconstruction ([`spsr`]) of the
 //!    points and fine-tuning of the points against its surface ([`feasible::fine_tune`]);
-//! 6. `finish`: a final solve, whose mesh is mapped back to the input's coordinates and checked.
+//! 6. `finish`: a final solve, whose mesh is mapped back to the input's coordinates, repaired,
+//!    simplified ([`Params::simplify`]: `rfta-simplify`, every sample's side and sphere kept) and
+//!    checked.
 //!
 //! [`check`] guards both ends: the values before anything is built, the mesh before it is
 //! returned. [`Params`] owns every setting and derives each stage's from them.
