@@ -524,6 +524,9 @@ def reach_for_the_arcs(
         tolerance=float(tol),
         clamp=None if not np.isfinite(clamp_value) else float(clamp_value),
         threads=None if parallel else 1,
+        # gpytoolbox's mesh is the Poisson extraction's, every triangle: so is the drop-in's
+        # (rfta.reconstruct simplifies).
+        simplify=False,
     )
     d = U.shape[1]
     try:
