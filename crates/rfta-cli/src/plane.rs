@@ -95,29 +95,7 @@ pub(crate) fn reconstruct(
         other => other.with_context(|| format!("{}: reconstruction failed", input.display()))?,
     };
     let r = &out.report;
-    ui.say(format!(
-        "reconstructed in {:.2} s: {} tangency points on {} circles, {} rounds, quadtree depth {}; {}",
-        t.elapsed().as_secs_f64(),
-        r.points,
-        r.circles_with_points,
-        r.rounds,
-        r.depth,
-        summary(&out.curve)
-    ));
-    if r.holes_opened > 0 {
-        ui.say(format!(
-            "opened {} hole(s) the curve closed around outside samples, through a wall thinner than a spacing that no inside sample shows (--keep-cavities keeps them)",
-            r.holes_opened
-        ));
-    }
-    if r.edges_unsimplified > out.curve.edges.len() {
-        ui.detail(format!(
-            "simplified {} edges to {}, at most {:.3} sample spacings from the curve before, every sample's side and circle kept (--no-simplify keeps them all)",
-            r.edges_unsimplified,
-            out.curve.edges.len(),
-            r.simplify_deviation
-        ));
-    }
+    describe(&out, t.elapsed().as_secs_f64(), ui);
     rfta_io::write_polylines(output, &out.curve)?;
     ui.say(format!("wrote {}", output.display()));
     if let Some(path) = extras.report {
@@ -148,6 +126,33 @@ pub(crate) fn reconstruct(
         ));
     }
     Ok(())
+}
+
+/// What a 2D reconstruction did, as the command line says it.
+fn describe(out: &rfta::plane::Reconstruction2, seconds: f64, ui: &Ui) {
+    let r = &out.report;
+    ui.say(format!(
+        "reconstructed in {seconds:.2} s: {} tangency points on {} circles, {} rounds, quadtree depth {}; {}",
+        r.points,
+        r.circles_with_points,
+        r.rounds,
+        r.depth,
+        summary(&out.curve)
+    ));
+    if r.holes_opened > 0 {
+        ui.say(format!(
+            "opened {} hole(s) the curve closed around outside samples, through a wall thinner than a spacing that no inside sample shows (--keep-cavities keeps them)",
+            r.holes_opened
+        ));
+    }
+    if r.edges_unsimplified > out.curve.edges.len() {
+        ui.detail(format!(
+            "simplified {} edges to {}, at most {:.3} sample spacings from the curve before, every sample's side and circle kept (--no-simplify keeps them all)",
+            r.edges_unsimplified,
+            out.curve.edges.len(),
+            r.simplify_deviation
+        ));
+    }
 }
 
 /// `--html` for 2D input: the samples (blue inside), rfta's curve in red and, on a grid,

@@ -169,30 +169,9 @@ pub fn reconstruct(samples: &SdfSamples2, params: &PlaneParams) -> Result<Recons
             Err(_) => crate::holes::Opened::default(),
         }
     });
-    let simplified = if params.simplify {
-        let per_axis = extent.max_element() / spacing;
-        let tolerance = params
-            .simplify_tolerance
-            .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis));
-        let (simpler, done) = crate::simplify::simplify(
-            curve,
-            &circles,
-            &values,
-            spacing,
-            tolerance,
-            params.max_edges,
-        );
-        curve = simpler;
-        done
-    } else {
-        crate::simplify::Simplified {
-            edges_before: curve.edges.len(),
-            deviation: 0.0,
-        }
-    };
-    for v in &mut curve.vertices {
-        *v = *v * scale + lo;
-    }
+    let simplify = crate::simplify::simplify;
+    let (mut curve, simplified) = simplify(curve, &circles, &values, spacing, extent, params);
+    curve.vertices.iter_mut().for_each(|v| *v = *v * scale + lo);
     let (points, normals) = cloud.oriented(&circles, &values);
     let points = (points.into_iter().zip(normals))
         .map(|(p, n)| (p * scale + lo, n))

@@ -8,6 +8,7 @@ use rfta_geom::plane::Polylines;
 use rfta_mesh::PolylineIndex;
 use rfta_simplify::{Options, Patch2, PolylineJudge, simplify_polylines};
 
+use crate::PlaneParams;
 use crate::arcs::Circle;
 use crate::params::ENTER_MARGIN;
 
@@ -28,28 +29,32 @@ pub(crate) struct Simplified {
     pub(crate) deviation: f64,
 }
 
-/// `curve` (unit square) simplified within `tolerance` spacings (`spacing` apart there), to at
-/// most `max_edges` edges when given, judged against the `circles` and their `values`.
+/// `curve` (unit square, `extent` the samples' box there) simplified as `params` say
+/// ([`PlaneParams::simplify`], its tolerance in spacings `spacing` apart, at most
+/// [`PlaneParams::max_edges`] edges), judged against the `circles` and their `values`.
 pub(crate) fn simplify(
     curve: Polylines,
     circles: &[Circle],
     values: &[f64],
     spacing: f64,
-    tolerance: f64,
-    max_edges: Option<usize>,
+    extent: DVec2,
+    params: &PlaneParams,
 ) -> (Polylines, Simplified) {
     let mut done = Simplified {
         edges_before: curve.edges.len(),
         deviation: 0.0,
     };
-    if curve.edges.is_empty() {
+    if !params.simplify || curve.edges.is_empty() {
         return (curve, done);
     }
+    let tolerance = params
+        .simplify_tolerance
+        .unwrap_or_else(|| rfta_simplify::default_tolerance(extent.max_element() / spacing));
     let tol = tolerance * spacing;
     let judge = CircleJudge::new(&curve, circles, values, spacing, tol);
     let options = Options {
         tolerance: tol,
-        max_faces: max_edges,
+        max_faces: params.max_edges,
     };
     match simplify_polylines(&curve, &options, &judge) {
         Ok(out) => {
