@@ -29,6 +29,15 @@ fn genus_and_pieces(mesh: &TriMesh) -> (Option<i64>, usize, usize) {
     )
 }
 
+/// The default reconstruction without simplification.
+fn unsimplified(samples: &SdfSamples) -> rfta::Reconstruction {
+    let params = Params {
+        simplify: false,
+        ..Params::default()
+    };
+    reconstruct(samples, &params).expect("unsimplified")
+}
+
 /// The largest distance from `a`'s vertices to `b`.
 fn one_way(a: &TriMesh, b: &TriMesh) -> f64 {
     let index = MeshIndex::new(b).expect("faces");
@@ -42,14 +51,7 @@ fn one_way(a: &TriMesh, b: &TriMesh) -> f64 {
 fn the_default_mesh_is_lighter_and_keeps_every_verdict() {
     let samples = torus_samples(24);
     let h = samples.spacing();
-    let full = reconstruct(
-        &samples,
-        &Params {
-            simplify: false,
-            ..Params::default()
-        },
-    )
-    .expect("unsimplified");
+    let full = unsimplified(&samples);
     let out = reconstruct(&samples, &Params::default()).expect("simplified");
     let (r, r0) = (&out.report, &full.report);
     // Off, nothing is simplified; on, the report counts the faces it started from.
@@ -104,14 +106,7 @@ fn a_face_budget_and_a_tolerance_are_honoured() {
     let default = reconstruct(&samples, &Params::default()).expect("default");
     assert!(close.mesh.n_faces() > default.mesh.n_faces());
     assert!(close.report.simplify.largest_deviation <= 0.01 + 1e-9);
-    let full = reconstruct(
-        &samples,
-        &Params {
-            simplify: false,
-            ..Params::default()
-        },
-    )
-    .expect("unsimplified");
+    let full = unsimplified(&samples);
     assert!(one_way(&full.mesh, &close.mesh) <= 0.01 * h + 1e-9);
 }
 
