@@ -38,8 +38,13 @@ fn square_with_hole(p: DVec2) -> f64 {
 #[test]
 fn a_circle_comes_back_as_one_loop_on_it() {
     // 33 x 33 samples, spacing 0.0625: the vertices within a tenth of a spacing of the circle,
-    // a two-hundredth on average.
-    let out = plane::reconstruct(&grid_samples(32, circle), &Params::default()).expect("curve");
+    // a two-hundredth on average (unsimplified: simplification keeps a subset of them, whose
+    // mean is another matter; `the_curve_is_simplified_keeping_every_sample_on_its_side`).
+    let params = Params {
+        simplify: false,
+        ..Params::default()
+    };
+    let out = plane::reconstruct(&grid_samples(32, circle), &params).expect("curve");
     assert_eq!(out.curve.loops(), 1);
     assert!(out.curve.is_closed());
     let (mean, max) = vertex_error(&out.curve, circle);
@@ -267,4 +272,42 @@ fn a_hole_behind_a_wall_no_sample_shows_is_opened_unless_kept() {
             assert_eq!(index.winding(*p) != 0, s < 0.0, "{p} {s}");
         }
     }
+}
+
+#[test]
+fn the_curve_is_simplified_keeping_every_sample_on_its_side() {
+    let samples = grid_samples(32, square_with_hole);
+    let h = 2.0 / 32.0;
+    let off = Params {
+        simplify: false,
+        ..Params::default()
+    };
+    let full = plane::reconstruct(&samples, &off).expect("unsimplified");
+    let out = plane::reconstruct(&samples, &Params::default()).expect("simplified");
+    let (c, c0) = (&out.curve, &full.curve);
+    assert_eq!(full.report.edges_unsimplified, c0.edges.len());
+    assert_eq!(out.report.edges_unsimplified, c0.edges.len());
+    assert!(
+        c.edges.len() * 2 < c0.edges.len(),
+        "{} of {}",
+        c.edges.len(),
+        c0.edges.len()
+    );
+    assert!(c.is_closed() && c.loops() == 2);
+    // Every sample farther than a hundredth of a spacing keeps its side (winding number).
+    let (index, index0) = (PolylineIndex::new(c), PolylineIndex::new(c0));
+    for (i, (&p, &s)) in samples.positions().iter().zip(samples.values()).enumerate() {
+        if s.abs() > 0.01 * h {
+            assert_eq!(index.winding(p), index0.winding(p), "sample {i} at {p}");
+        }
+    }
+    // The simplified curve's vertices are the unsimplified curve's, so they lie as close to
+    // the boundary; its edges are within the default tolerance (0.8 / 32 spacings) of it.
+    let tol = 0.8 / 32.0 * h;
+    assert!(out.report.simplify_deviation <= 0.8 / 32.0 + 1e-9);
+    for &[a, b] in &c.edges {
+        let mid = 0.5 * (c.vertices[a as usize] + c.vertices[b as usize]);
+        assert!(index0.closest(mid).distance <= tol + 1e-12);
+    }
+    assert!(c.vertices.iter().all(|v| c0.vertices.contains(v)));
 }
