@@ -19,8 +19,12 @@ const SIGN_MARGIN: f64 = 0.01;
 /// the margin at which a circle counts as entered).
 const ENTER_SLACK: f64 = 0.8 * ENTER_MARGIN;
 
-/// A sample is watched when it is within this many tolerances of being touched.
+/// A sample is watched when it is within this many tolerances of being touched, and at least
+/// this many spacings (samples with a side) or this many beyond the slack (circles): a chord
+/// can stray further than the tolerance between the points it is measured at.
 const WATCH: f64 = 1.2;
+const WATCH_SIDES: f64 = 0.25;
+const WATCH_CIRCLES: f64 = 0.05;
 
 /// What simplification did: the edges before and the largest deviation, in spacings.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -66,8 +70,9 @@ pub(crate) fn simplify(
     }
 }
 
-/// The circles a removal could change the verdict of: those within `max(r - slack, 0) + WATCH
-/// tolerance` of the curve (few: the curve touches most circles from outside them).
+/// The circles a removal could change the verdict of: the samples with a side within
+/// `max(WATCH tolerance, WATCH_SIDES h)` of the curve and the circles within `r - slack +
+/// max(WATCH tolerance, WATCH_CIRCLES h)` (few: the curve touches most circles from outside).
 struct CircleJudge {
     watched: Vec<(Circle, bool)>,
     slack: f64,
@@ -80,11 +85,20 @@ impl CircleJudge {
         let watched = circles
             .iter()
             .zip(values)
-            .filter(|(c, _)| {
-                let watch = (c.radius - slack).max(0.0) + WATCH * tol;
-                index.closest(c.center).distance < watch
-            })
             .map(|(c, &s)| (*c, s.abs() > SIGN_MARGIN * h))
+            .filter(|(c, sided)| {
+                let by_side = if *sided {
+                    (WATCH * tol).max(WATCH_SIDES * h)
+                } else {
+                    0.0
+                };
+                let by_circle = if c.radius > slack {
+                    c.radius - slack + (WATCH * tol).max(WATCH_CIRCLES * h)
+                } else {
+                    0.0
+                };
+                index.closest(c.center).distance < by_side.max(by_circle)
+            })
             .collect();
         Self { watched, slack }
     }

@@ -35,6 +35,13 @@ const DEFAULT_AT_MOST: f64 = 0.06;
 /// sample is watched when it is within this many tolerances of being touched.
 const WATCH: f64 = 1.2;
 
+/// ... and at least this many spacings (samples with a side) or this many beyond the slack
+/// (spheres): between the points it is measured at, a face can stray further than the
+/// tolerance (the 129^3 bunny simplified within 0.02 spacings put one sample on the other side
+/// with the tolerance alone watched).
+const WATCH_SIDES: f64 = 0.25;
+const WATCH_SPHERES: f64 = 0.05;
+
 /// `mesh` (the samples' coordinates) simplified as [`crate::Params`] say, its tolerance and
 /// margins in units of `spacing` (the samples' own, or where the surface is, an adaptive run's
 /// finest), with its report; the mesh as it is when simplification is off.
@@ -90,7 +97,8 @@ struct SampleJudge {
 
 impl SampleJudge {
     /// The samples whose verdict a surface within `tolerance` of `mesh` could change: those
-    /// within `w = max(r - slack, 0) + WATCH tolerance` of it (`r` their sphere's radius), of
+    /// with a side within `max(WATCH tolerance, WATCH_SIDES h)` of it, and the spheres within
+    /// `w = r - slack + max(WATCH tolerance, WATCH_SPHERES h)` (`r` their radius), of
     /// spheres up to `CLEAR_BELOW` owner radii, the ones repair clears (a wider sphere the surface
     /// touches is entered by a surface within the tolerance by less than a narrower one there).
     /// With the default tolerance, below the slack, those are the few spheres the mesh already
@@ -111,9 +119,19 @@ impl SampleJudge {
                 if sphere.radius > reach {
                     return None;
                 }
-                let watch = (sphere.radius - slack).max(0.0) + WATCH * tolerance;
-                let foot = index.closest_point_within(sphere.center, watch * watch)?;
                 let sided = unit.to_input_length(unit.values[i].abs()) > SIGN_MARGIN * h;
+                let by_side = if sided {
+                    (WATCH * tolerance).max(WATCH_SIDES * h)
+                } else {
+                    0.0
+                };
+                let by_sphere = if sphere.radius > slack {
+                    sphere.radius - slack + (WATCH * tolerance).max(WATCH_SPHERES * h)
+                } else {
+                    0.0
+                };
+                let watch = by_side.max(by_sphere);
+                let foot = index.closest_point_within(sphere.center, watch * watch)?;
                 Some((sphere, sided, watch, foot.point))
             })
             .collect();
@@ -134,7 +152,7 @@ impl SampleJudge {
             let b = &mut boxes[j as usize];
             *b = (b.0.min(v), b.1.max(v));
         }
-        let grow = DVec3::splat(0.5 * h + WATCH * tolerance.min(h));
+        let grow = DVec3::splat(0.5 * h + (WATCH * tolerance).max(WATCH_SIDES * h).min(h));
         let mut cells = Cells::default();
         for (j, (lo, hi)) in boxes.into_iter().enumerate() {
             for key in cells_of(lo - grow, hi + grow, h) {
