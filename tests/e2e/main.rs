@@ -14,3 +14,6 @@ mod reconstruct;
 
 /// The bad-input corpus through the library.
 mod bad_inputs;
+
+/// The simplification on every dev output.
+mod simplify;
