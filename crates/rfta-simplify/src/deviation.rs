@@ -4,8 +4,8 @@
 //! collapse's new faces within the tolerance of it (the one it lay on when that face remains,
 //! else the nearest) and must have one; later collapses of that face hand it on (the bookkeeping
 //! of Hausdorff-bounded simplifiers since Klein, Liebich and Strasser, "Mesh reduction with error
-//! control", 1996). Output to input: each collapse's new vertex must lie within the tolerance of
-//! the input surface. The largest distance either way is kept.
+//! control", 1996). Output to input: each collapse's new vertex and its new faces' centroids
+//! must lie within the tolerance of the input surface. The largest distance either way is kept.
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;

@@ -5,9 +5,9 @@
 //! - **the topology**: a collapse is made only where the link condition holds (Dey et al. 1999),
 //!   so a closed manifold stays closed and manifold with the same genus and components; vertices
 //!   on a boundary or a non-manifold edge never move;
-//! - **the surface**: within [`Options::tolerance`] of the input both ways, measured where the
-//!   meshes have vertices (every input vertex within it of the output, every vertex a collapse
-//!   places within it of the input);
+//! - **the surface**: within [`Options::tolerance`] of the input both ways, measured at points
+//!   (every input vertex within it of the output; every vertex a collapse places, and its new
+//!   faces' centroids, within it of the input);
 //! - **the faces' shape**: no face turns over (nor by more than 60 degrees), none is left without
 //!   area or much thinner than the thinnest it replaces;
 //! - **the caller's judge**: every collapse that passes the rest is offered to a [`Judge`] as a
