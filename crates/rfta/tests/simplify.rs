@@ -97,13 +97,15 @@ fn a_face_budget_and_a_tolerance_are_honoured() {
     assert!(out.mesh.n_faces() <= 600, "{}", out.mesh.n_faces());
     assert_eq!(genus_and_pieces(&out.mesh), (Some(1), 1, 0));
     assert_eq!(out.report.consistency.sign_errors, 0);
+    // The budget is below what the default tolerance keeps, so it is what stopped the run.
+    let default = reconstruct(&samples, &Params::default()).expect("default");
+    assert!(default.mesh.n_faces() > 600, "{}", default.mesh.n_faces());
     // A tighter tolerance keeps more faces and stays within it.
     let tight = Params {
         simplify_tolerance: Some(0.01),
         ..Params::default()
     };
     let close = reconstruct(&samples, &tight).expect("tight");
-    let default = reconstruct(&samples, &Params::default()).expect("default");
     assert!(close.mesh.n_faces() > default.mesh.n_faces());
     assert!(close.report.simplify.largest_deviation <= 0.01 + 1e-9);
     let full = unsimplified(&samples);
