@@ -37,7 +37,7 @@ struct Entry {
 /// depend on the number of threads.
 pub(crate) fn run(
     mesh: &mut Editable,
-    deviation: &mut Deviation,
+    deviation: &mut Deviation<'_>,
     max_faces: usize,
     judge: &dyn Judge,
 ) -> usize {
@@ -88,7 +88,7 @@ const BATCH: usize = 64;
 /// the faces' shape, the tolerance and the judge, in that order.
 fn try_collapse(
     mesh: &Editable,
-    deviation: &Deviation,
+    deviation: &Deviation<'_>,
     judge: &dyn Judge,
     e: &Entry,
     target: DVec3,

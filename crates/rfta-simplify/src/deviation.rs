@@ -15,8 +15,8 @@ use rfta_mesh::MeshIndex;
 use crate::editable::Change;
 
 /// Input vertex ids carried by the current faces, and the largest deviation so far.
-pub(crate) struct Deviation {
-    input: MeshIndex,
+pub(crate) struct Deviation<'a> {
+    input: &'a MeshIndex,
     input_vertices: Vec<DVec3>,
     tolerance_squared: f64,
     /// For each current vertex, the input vertex at whose place it still is (`u32::MAX`: moved).
@@ -34,16 +34,17 @@ pub(crate) struct HandOver {
     largest: f64,
 }
 
-impl Deviation {
-    pub(crate) fn new(mesh: &TriMesh, tolerance: f64) -> rfta_mesh::Result<Self> {
-        Ok(Self {
-            input: MeshIndex::new(mesh)?,
+impl<'a> Deviation<'a> {
+    /// The bookkeeping of `mesh`, whose index is `input`.
+    pub(crate) fn new(mesh: &TriMesh, input: &'a MeshIndex, tolerance: f64) -> Self {
+        Self {
+            input,
             input_vertices: mesh.vertices.clone(),
             tolerance_squared: tolerance * tolerance,
             unmoved: (0..mesh.n_vertices() as u32).collect(),
             carried: vec![Vec::new(); mesh.n_faces()],
             largest: 0.0,
-        })
+        }
     }
 
     /// Whether collapsing `b` into `a` as `change` says stays within the tolerance both ways;

@@ -45,6 +45,7 @@ mod polylines;
 mod quadric;
 
 use rfta_geom::TriMesh;
+use rfta_mesh::MeshIndex;
 
 pub use patch::Patch;
 pub use polylines::{Patch2, PolylineJudge, SimplifiedPolylines, simplify_polylines};
@@ -113,6 +114,14 @@ pub enum Error {
     /// The mesh cannot be indexed (no faces).
     #[error("{0}")]
     Mesh(#[from] rfta_mesh::Error),
+    /// The index given to [`simplify_indexed`] is of a mesh with another number of faces.
+    #[error("the index has {index} faces, the mesh {mesh}: it is another mesh's")]
+    IndexOfAnotherMesh {
+        /// The index's faces.
+        index: usize,
+        /// The mesh's.
+        mesh: usize,
+    },
 }
 
 /// `mesh` simplified as `options` allow and `judge` agrees (see the crate documentation).
@@ -121,11 +130,32 @@ pub enum Error {
 /// [`Error::Tolerance`] for a negative or NaN tolerance, [`Error::Invalid`] for an invalid mesh,
 /// [`Error::Mesh`] for one that cannot be indexed.
 pub fn simplify(mesh: &TriMesh, options: &Options, judge: &dyn Judge) -> Result<Simplified, Error> {
+    mesh.validate()?;
+    simplify_indexed(mesh, &MeshIndex::new(mesh)?, options, judge)
+}
+
+/// [`simplify`] with the input's index (`MeshIndex::new(mesh)`) given, for a caller whose judge
+/// indexes the mesh too.
+///
+/// # Errors
+/// As [`simplify`], and [`Error::IndexOfAnotherMesh`] when `index` has another face count.
+pub fn simplify_indexed(
+    mesh: &TriMesh,
+    index: &MeshIndex,
+    options: &Options,
+    judge: &dyn Judge,
+) -> Result<Simplified, Error> {
     if options.tolerance.is_nan() || options.tolerance < 0.0 {
         return Err(Error::Tolerance(options.tolerance));
     }
     mesh.validate()?;
-    let mut deviation = deviation::Deviation::new(mesh, options.tolerance)?;
+    if index.n_faces() != mesh.n_faces() {
+        return Err(Error::IndexOfAnotherMesh {
+            index: index.n_faces(),
+            mesh: mesh.n_faces(),
+        });
+    }
+    let mut deviation = deviation::Deviation::new(mesh, index, options.tolerance);
     let mut editable = editable::Editable::new(mesh);
     let collapses = collapse::run(
         &mut editable,

@@ -186,6 +186,13 @@ fn bad_options_and_meshes_are_refused() {
         &anything,
     );
     assert!(matches!(e, Err(Error::Invalid(_))), "{e:?}");
+    let other = MeshIndex::new(&shapes::icosphere(1.0, 2)).expect("indexed");
+    let opts = Options {
+        tolerance: 0.1,
+        max_faces: None,
+    };
+    let e = rfta_simplify::simplify_indexed(&ball, &other, &opts, &anything);
+    assert!(matches!(e, Err(Error::IndexOfAnotherMesh { .. })), "{e:?}");
 }
 
 /// A closed mesh of random blobs: marching cubes of the union of a few balls.

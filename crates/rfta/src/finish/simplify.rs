@@ -67,15 +67,17 @@ pub(crate) fn simplify(
         .simplify_tolerance_set()
         .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis).min(DEFAULT_AT_MOST));
     let tolerance = spacings * h;
-    let judge = SampleJudge::new(plan, &mesh, h, tolerance)?;
+    let index = MeshIndex::new(&mesh)?;
+    let judge = SampleJudge::new(plan, &mesh, &index, h, tolerance);
     let options = Options {
         tolerance,
         max_faces: params.faces,
     };
-    let out = rfta_simplify::simplify(&mesh, &options, &judge).map_err(|e| match e {
-        rfta_simplify::Error::Mesh(e) => crate::Error::Consistency(e),
-        other => crate::Error::InvalidParams(other.to_string()),
-    })?;
+    let out =
+        rfta_simplify::simplify_indexed(&mesh, &index, &options, &judge).map_err(|e| match e {
+            rfta_simplify::Error::Mesh(e) => crate::Error::Consistency(e),
+            other => crate::Error::InvalidParams(other.to_string()),
+        })?;
     report.largest_deviation = out.largest_deviation / h;
     report.faces_after = out.mesh.n_faces();
     journal.timed(Step::Simplify, t);
@@ -105,11 +107,10 @@ impl SampleJudge {
     /// enters and the samples within a tolerance of it. Each is filed under the cells the box
     /// of the mesh within `w` of it touches (its closest point and the vertices there, grown by
     /// half a spacing and the watch): a collapse elsewhere comes no nearer to it than `w`.
-    fn new(plan: &Plan<'_>, mesh: &TriMesh, h: f64, tolerance: f64) -> Result<Self> {
+    fn new(plan: &Plan<'_>, mesh: &TriMesh, index: &MeshIndex, h: f64, tolerance: f64) -> Self {
         let unit = &plan.unit;
         let slack = ENTER_SLACK * h;
         let reach = unit.to_input_length(super::CLEAR_BELOW * plan.owner_radius);
-        let index = MeshIndex::new(mesh)?;
         crate::pool::waiters_back();
         let near: Vec<(Sphere, bool, f64, DVec3)> = (0..unit.len())
             .into_par_iter()
@@ -161,14 +162,14 @@ impl SampleJudge {
         }
         let (spheres, sided): (Vec<Sphere>, Vec<bool>) =
             near.into_iter().map(|n| (n.0, n.1)).unzip();
-        Ok(Self {
+        Self {
             cells,
             cell: h,
             spheres,
             sided,
             spheres_bind: !plan.field.level_set,
             slack,
-        })
+        }
     }
 }
 
