@@ -52,18 +52,24 @@ pub use polylines::{Patch2, PolylineJudge, SimplifiedPolylines, simplify_polylin
 
 /// The tolerance, in sample spacings, that costs a reconstruction from samples `per_axis`
 /// spacings across (the samples' longest extent over their spacing) about 2% of its mean
-/// Chamfer distance: `0.8 / per_axis`, i.e. `0.8 h^2 / L`.
+/// Chamfer distance: `0.8 / per_axis`, i.e. `0.8 h^2 / L`, and at most 0.06.
 ///
 /// A reconstruction's own error falls about as the square of the spacing (rfta's mean Chamfer on
 /// its dev set: 0.047, 0.020, 0.0077, 0.0029 at 10, 20, 30 and 50 spacings across), so a
 /// tolerance that costs it a fixed share does too; the factor was measured on that set between
-/// 0.01 and 0.2 spacings (docs/eval/README.md).
+/// 0.01 and 0.2 spacings (docs/eval/README.md). The cap is for coarse samples: at 10 spacings
+/// across, 0.08 took a quarter of rfta's run (a surface that may stray that far can enter every
+/// sphere it touches by rfta's slack, so its judge watches them all), while 0.06 still gives
+/// under 3 times marching cubes' faces there.
 pub fn default_tolerance(per_axis: f64) -> f64 {
-    DEFAULT_TOLERANCE / per_axis.max(1.0)
+    (DEFAULT_TOLERANCE / per_axis.max(1.0)).min(DEFAULT_AT_MOST)
 }
 
 /// The factor of [`default_tolerance`].
 const DEFAULT_TOLERANCE: f64 = 0.8;
+
+/// [`default_tolerance`]'s cap, in spacings.
+const DEFAULT_AT_MOST: f64 = 0.06;
 
 /// What the simplification may do.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -25,12 +25,6 @@ use crate::{Result, Step};
 /// the margin at which the consistency check counts a sphere as entered).
 const ENTER_SLACK: f64 = 0.8 * ENTER_MARGIN;
 
-/// The default tolerance is at most this many spacings (at N = 10 it would be 0.08): below the
-/// slack, a surface within the tolerance enters a sphere it only touches by less than the
-/// slack, so only the few spheres it already enters need watching; at the slack every tangent
-/// sphere does, and the step took a quarter of an N = 10 run (0.07 of 0.27 s).
-const DEFAULT_AT_MOST: f64 = 0.06;
-
 /// The surface is measured within the tolerance at its vertices and its faces' centroids; a
 /// sample is watched when it is within this many tolerances of being touched.
 const WATCH: f64 = 1.2;
@@ -65,7 +59,7 @@ pub(crate) fn simplify(
     let per_axis = plan.unit.to_input_length(1.0) / h;
     let spacings = params
         .simplify_tolerance_set()
-        .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis).min(DEFAULT_AT_MOST));
+        .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis));
     let tolerance = spacings * h;
     let index = MeshIndex::new(&mesh)?;
     let judge = SampleJudge::new(plan, &mesh, &index, h, tolerance);
