@@ -6,7 +6,7 @@
 use rfta_geom::glam::DVec2;
 use rfta_geom::plane::Polylines;
 use rfta_mesh::PolylineIndex;
-use rfta_simplify::{Options, Patch2, PolylineJudge, simplify_polylines};
+use rfta_simplify::{Options, Patch2, PolylineJudge, Watch, simplify_polylines};
 
 use crate::PlaneParams;
 use crate::arcs::Circle;
@@ -18,13 +18,6 @@ const SIGN_MARGIN: f64 = 0.01;
 /// A removal may bring the curve into a circle up to this many spacings deep (four fifths of
 /// the margin at which a circle counts as entered).
 const ENTER_SLACK: f64 = 0.8 * ENTER_MARGIN;
-
-/// A sample is watched when it is within this many tolerances of being touched, and at least
-/// this many spacings (samples with a side) or this many beyond the slack (circles): a chord
-/// can stray further than the tolerance between the points it is measured at.
-const WATCH: f64 = 1.2;
-const WATCH_SIDES: f64 = 0.25;
-const WATCH_CIRCLES: f64 = 0.05;
 
 /// What simplification did: the edges before and the largest deviation, in spacings.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -70,9 +63,8 @@ pub(crate) fn simplify(
     }
 }
 
-/// The circles a removal could change the verdict of: the samples with a side within
-/// `max(WATCH tolerance, WATCH_SIDES h)` of the curve and the circles within `r - slack +
-/// max(WATCH tolerance, WATCH_CIRCLES h)` (few: the curve touches most circles from outside).
+/// The circles a removal could change the verdict of: those within [`Watch::reach`] of the
+/// curve (few: the curve touches most circles from outside).
 struct CircleJudge {
     watched: Vec<(Circle, bool)>,
     slack: f64,
@@ -82,23 +74,16 @@ impl CircleJudge {
     fn new(curve: &Polylines, circles: &[Circle], values: &[f64], h: f64, tol: f64) -> Self {
         let index = PolylineIndex::new(curve);
         let slack = ENTER_SLACK * h;
+        let watch = Watch {
+            slack,
+            tolerance: tol,
+            spacing: h,
+        };
         let watched = circles
             .iter()
             .zip(values)
             .map(|(c, &s)| (*c, s.abs() > SIGN_MARGIN * h))
-            .filter(|(c, sided)| {
-                let by_side = if *sided {
-                    (WATCH * tol).max(WATCH_SIDES * h)
-                } else {
-                    0.0
-                };
-                let by_circle = if c.radius > slack {
-                    c.radius - slack + (WATCH * tol).max(WATCH_CIRCLES * h)
-                } else {
-                    0.0
-                };
-                index.closest(c.center).distance < by_side.max(by_circle)
-            })
+            .filter(|(c, sided)| index.closest(c.center).distance < watch.reach(c.radius, *sided))
             .collect();
         Self { watched, slack }
     }

@@ -43,12 +43,14 @@ mod editable;
 mod patch;
 mod polylines;
 mod quadric;
+mod watch;
 
 use rfta_geom::TriMesh;
 use rfta_mesh::MeshIndex;
 
 pub use patch::Patch;
 pub use polylines::{Patch2, PolylineJudge, SimplifiedPolylines, simplify_polylines};
+pub use watch::Watch;
 
 /// The tolerance, in sample spacings, that costs a reconstruction from samples `per_axis`
 /// spacings across (the samples' longest extent over their spacing) about 2% of its mean

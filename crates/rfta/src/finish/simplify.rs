@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Sphere, TriMesh};
 use rfta_mesh::MeshIndex;
-use rfta_simplify::{Judge, Options, Patch};
+use rfta_simplify::{Judge, Options, Patch, Watch};
 use rfta_sphere_tree::SphereTree;
 
 use crate::consistency::{ENTER_MARGIN, SIGN_MARGIN};
@@ -24,17 +24,6 @@ use crate::{Result, Step};
 /// A collapse may bring the surface into a sphere up to this many spacings deep (four fifths of
 /// the margin at which the consistency check counts a sphere as entered).
 const ENTER_SLACK: f64 = 0.8 * ENTER_MARGIN;
-
-/// The surface is measured within the tolerance at its vertices and its faces' centroids; a
-/// sample is watched when it is within this many tolerances of being touched.
-const WATCH: f64 = 1.2;
-
-/// ... and at least this many spacings (samples with a side) or this many beyond the slack
-/// (spheres): between the points it is measured at, a face can stray further than the
-/// tolerance (the 129^3 bunny simplified within 0.02 spacings put one sample on the other side
-/// with the tolerance alone watched).
-const WATCH_SIDES: f64 = 0.25;
-const WATCH_SPHERES: f64 = 0.05;
 
 /// `mesh` (the samples' coordinates) simplified as [`crate::Params`] say, its tolerance and
 /// margins in units of `spacing` (the samples' own, or where the surface is, an adaptive run's
@@ -93,17 +82,21 @@ struct SampleJudge {
 
 impl SampleJudge {
     /// The samples whose verdict a surface within `tolerance` of `mesh` could change: those
-    /// with a side within `max(WATCH tolerance, WATCH_SIDES h)` of it, and the spheres within
-    /// `w = r - slack + max(WATCH tolerance, WATCH_SPHERES h)` (`r` their radius), of
-    /// spheres up to `CLEAR_BELOW` owner radii, the ones repair clears (a wider sphere the surface
-    /// touches is entered by a surface within the tolerance by less than a narrower one there).
-    /// With the default tolerance, below the slack, those are the few spheres the mesh already
-    /// enters and the samples within a tolerance of it. Each is filed under the cells the box
-    /// of the mesh within `w` of it touches (its closest point and the vertices there, grown by
-    /// half a spacing and the watch): a collapse elsewhere comes no nearer to it than `w`.
+    /// within `w` of it ([`Watch::reach`]), of spheres up to `CLEAR_BELOW` owner radii, the ones
+    /// repair clears (a wider sphere the surface touches is entered by a surface within the
+    /// tolerance by less than a narrower one there). With the default tolerance, below the
+    /// slack, those are the few spheres the mesh already enters and the samples within a
+    /// quarter spacing of it. Each is filed under the cells the box of the mesh within `w` of it
+    /// touches (its closest point and the vertices there, grown by [`Watch::margin`]): a
+    /// collapse elsewhere comes no nearer to it than `w`.
     fn new(plan: &Plan<'_>, mesh: &TriMesh, index: &MeshIndex, h: f64, tolerance: f64) -> Self {
         let unit = &plan.unit;
         let slack = ENTER_SLACK * h;
+        let watch = Watch {
+            slack,
+            tolerance,
+            spacing: h,
+        };
         let reach = unit.to_input_length(super::CLEAR_BELOW * plan.owner_radius);
         crate::pool::waiters_back();
         let near: Vec<(Sphere, bool, f64, DVec3)> = (0..unit.len())
@@ -115,17 +108,7 @@ impl SampleJudge {
                     return None;
                 }
                 let sided = unit.to_input_length(unit.values[i].abs()) > SIGN_MARGIN * h;
-                let by_side = if sided {
-                    (WATCH * tolerance).max(WATCH_SIDES * h)
-                } else {
-                    0.0
-                };
-                let by_sphere = if sphere.radius > slack {
-                    sphere.radius - slack + (WATCH * tolerance).max(WATCH_SPHERES * h)
-                } else {
-                    0.0
-                };
-                let watch = by_side.max(by_sphere);
+                let watch = watch.reach(sphere.radius, sided);
                 let foot = index.closest_point_within(sphere.center, watch * watch)?;
                 Some((sphere, sided, watch, foot.point))
             })
@@ -147,7 +130,7 @@ impl SampleJudge {
             let b = &mut boxes[j as usize];
             *b = (b.0.min(v), b.1.max(v));
         }
-        let grow = DVec3::splat(0.5 * h + (WATCH * tolerance).max(WATCH_SIDES * h).min(h));
+        let grow = DVec3::splat(watch.margin());
         let mut cells = Cells::default();
         for (j, (lo, hi)) in boxes.into_iter().enumerate() {
             for key in cells_of(lo - grow, hi + grow, h) {
