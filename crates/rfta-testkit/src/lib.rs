@@ -61,6 +61,20 @@ pub fn input_names(data: &std::path::Path) -> Vec<String> {
     names
 }
 
+/// The prepared grids (`inputs/NAME/sdf_nN.npy` for N = 10, 20, 30, 50) that exist: name, N
+/// and path, by name then N.
+pub fn input_grids(data: &std::path::Path) -> Vec<(String, usize, PathBuf)> {
+    input_names(data)
+        .into_iter()
+        .flat_map(|name| {
+            [10, 20, 30, 50].into_iter().filter_map(move |n| {
+                let path = data.join(format!("inputs/{name}/sdf_n{n}.npy"));
+                path.is_file().then(|| (name.clone(), n, path))
+            })
+        })
+        .collect()
+}
+
 /// Shapes with exact signed distance functions (moved to `rfta_geom`, where the demos use them).
 pub use rfta_geom::Analytic;
 
