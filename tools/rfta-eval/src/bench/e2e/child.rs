@@ -1,66 +1,105 @@
 //! `bench e2e`'s child processes: each method on one grid in a process of its own (rfta and
-//! marching cubes as `bench-child e2e`, gpytoolbox in Python), its time, CPU and peak memory.
+//! marching cubes as `bench-child e2e`, gpytoolbox and scikit-image in Python), its time, CPU
+//! and peak memory.
 
 use super::*;
 
-/// A Python that imports gpytoolbox: `--python`, else `python3` if it has it.
-pub(super) fn find_python(given: Option<&str>, out: &Path) -> Result<Option<PathBuf>> {
+/// The Python the peers run in, and which of them it can import.
+pub(super) struct Python {
+    pub(super) path: PathBuf,
+    /// gpytoolbox's `reach_for_the_arcs`.
+    pub(super) gpytoolbox: bool,
+    /// scikit-image's `marching_cubes`.
+    pub(super) skimage: bool,
+}
+
+/// `--python`, else `python3`, with the peers it imports (numpy at least; `--python` must have
+/// one of them).
+pub(super) fn find_python(given: Option<&str>, out: &Path) -> Result<Option<Python>> {
     let candidate = given.unwrap_or("python3");
-    let ok = Command::new(candidate)
-        .args(["-c", "import gpytoolbox, numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
+    let imports = |module: &str| {
+        Command::new(candidate)
+            .args(["-c", &format!("import numpy, {module}")])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    let python = Python {
+        path: PathBuf::from(candidate),
+        gpytoolbox: imports("gpytoolbox"),
+        skimage: imports("skimage.measure"),
+    };
+    if !python.gpytoolbox && !python.skimage {
         if given.is_some() {
-            bail!("{candidate} cannot import gpytoolbox and numpy");
+            bail!("{candidate} imports neither gpytoolbox nor scikit-image (with numpy)");
         }
         return Ok(None);
     }
-    std::fs::write(out.join("gpytoolbox_child.py"), PYTHON_CHILD)?;
-    Ok(Some(PathBuf::from(candidate)))
+    std::fs::write(out.join("peers_child.py"), PYTHON_CHILD)?;
+    Ok(Some(python))
 }
 
-/// gpytoolbox's `reach_for_the_arcs` with its defaults on a grid; one JSON line out.
+/// The peers on a grid, in a process of their own: `peers_child.py METHOD SDF OUT LO.. HI..` runs
+/// scikit-image's marching cubes at level 0 at the grid's spacing and origin (`skimage`) or
+/// gpytoolbox's `reach_for_the_arcs` with its defaults (`gpytoolbox`), writes the mesh as OBJ
+/// and prints one JSON line: the time of the call alone, as for every method, and the process's
+/// peak memory.
 pub(super) const PYTHON_CHILD: &str = r#"import json, resource, sys, time
 import numpy as np
-import gpytoolbox as gpy
-sdf, out = sys.argv[1], sys.argv[2]
-lo = [float(v) for v in sys.argv[3:6]]
-hi = [float(v) for v in sys.argv[6:9]]
+method, sdf, out = sys.argv[1], sys.argv[2], sys.argv[3]
+lo = [float(v) for v in sys.argv[4:7]]
+hi = [float(v) for v in sys.argv[7:10]]
 S = np.load(sdf)
-axes = [np.linspace(lo[a], hi[a], S.shape[a]) for a in range(3)]
-X, Y, Z = np.meshgrid(*axes, indexing="ij")
-U = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
-t, c = time.perf_counter(), time.process_time()
-V, F = gpy.reach_for_the_arcs(U, S.ravel())
-wall, cpu = time.perf_counter() - t, time.process_time() - c
-gpy.write_mesh(out, V, F)
-rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+if method == "skimage":
+    from skimage import measure
+    spacing = tuple((hi[a] - lo[a]) / (S.shape[a] - 1) for a in range(3))
+    t, c = time.perf_counter(), time.process_time()
+    V, F, _, _ = measure.marching_cubes(S, level=0.0, spacing=spacing)
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+    V = V + np.array(lo)
+else:
+    import gpytoolbox as gpy
+    axes = [np.linspace(lo[a], hi[a], S.shape[a]) for a in range(3)]
+    X, Y, Z = np.meshgrid(*axes, indexing="ij")
+    U = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+    t, c = time.perf_counter(), time.process_time()
+    V, F = gpy.reach_for_the_arcs(U, S.ravel())
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+with open(out, "w") as f:
+    f.writelines("v %.17g %.17g %.17g\n" % tuple(v) for v in V)
+    f.writelines("f %d %d %d\n" % tuple(t + 1) for t in F)
+# VmHWM: this process's own peak (getrusage's ru_maxrss carries the parent's over exec).
+try:
+    with open("/proc/self/status") as f:
+        rss = next(float(l.split()[1]) for l in f if l.startswith("VmHWM:")) / 1024.0
+except (OSError, StopIteration):
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 print(json.dumps({"wall": wall, "cpu": cpu, "rss_mb": rss}))
 "#;
 
 /// Runs one method in a child process; `(wall, cpu, peak MB)`.
 pub(super) fn child(
     exe: &Path,
-    python: Option<&Path>,
+    python: Option<&Python>,
     method: &str,
     threads: usize,
     input: &Input,
     mesh: &Path,
 ) -> Result<(f64, f64, f64, f64)> {
-    let mut cmd = if method == "gpytoolbox" {
-        let python = python.context("no Python with gpytoolbox")?;
+    let peer = matches!(method, "gpytoolbox" | "skimage");
+    let mut cmd = if peer {
+        let python = python.context("no Python with the peers")?;
         let raw = rfta_io::read_sdf(&input.path, None)?;
         let Layout::Grid(g) = raw.layout else {
             bail!("{} is not a grid", input.path.display());
         };
         let b = g.bounds();
-        let mut c = Command::new(python);
+        let mut c = Command::new(&python.path);
         let script = mesh
             .parent()
             .unwrap_or(Path::new("."))
-            .join("gpytoolbox_child.py");
+            .join("peers_child.py");
         c.arg(script)
+            .arg(method)
             .arg(&input.path)
             .arg(mesh.with_extension("obj"));
         for v in b.min.to_array().into_iter().chain(b.max.to_array()) {
@@ -81,7 +120,7 @@ pub(super) fn child(
     if !o.status.success() {
         bail!("{}", String::from_utf8_lossy(&o.stderr).trim());
     }
-    if method == "gpytoolbox" {
+    if peer {
         // Scored as PLY like the others.
         let m = rfta_io::read_mesh(&mesh.with_extension("obj"))?;
         rfta_io::write_mesh(mesh, &m)?;

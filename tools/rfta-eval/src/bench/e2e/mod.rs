@@ -1,7 +1,7 @@
 //! `cargo xtask bench e2e`: where the reconstruction stands, end to end, in one run.
 //!
 //! ```text
-//! cargo bench-e2e [--quick] [--python PATH] [--res 20,30] [--large 64,128] [--shape bunny]
+//! cargo bench-e2e [--quick] [--python PATH] [--res 20,50] [--large 128,256] [--shape bunny]
 //!                 [--out DIR]
 //! cargo bench-e2e --from-csv target/bench/e2e.csv     # the tables again, from a run's rows
 //! ```
@@ -19,16 +19,19 @@
 //!   with no serial part, the ceiling the pipeline's speed-up is read against (2.0x on the
 //!   project's idle VM; anything else running on the machine, or a host that gives its two
 //!   cores less than two cores' time, shows there first);
-//! - `rfta-fast` (`--preset fast`, gpytoolbox's 3 rounds) on 2 threads;
-//! - `mc`, marching cubes;
-//! - `gpytoolbox`, `reach_for_the_arcs` with its defaults, when a Python with gpytoolbox is found
-//!   (`--python PATH`, else `python3`); on the `--res` grids only (the reference did not finish
-//!   N = 50 within 20 minutes).
+//! - `rfta-fast` (`--preset fast`, gpytoolbox's 3 rounds) on 2 threads, on the `--res` grids;
+//! - `mc`, the project's marching cubes (`rfta mc`);
+//! - `skimage`, scikit-image's `marching_cubes`, when the Python (`--python PATH`, else
+//!   `python3`) imports it;
+//! - `gpytoolbox`, `reach_for_the_arcs` with its defaults, when that Python imports gpytoolbox;
+//!   on the `--res` grids up to N = 30 only (the reference did not finish N = 50 within 20
+//!   minutes).
 //!
 //! Each run is a child process of its own: wall and CPU seconds of the reconstruction call, peak
 //! resident memory of the child. The parent scores every mesh against `gt.obj` (the paper's
 //! Chamfer, 2 x 10^5 samples per side) and writes `e2e.md` and `e2e.csv` to `--out`
-//! (`target/bench`), with the ratios of gpytoolbox's CPU time to ours and ours to marching cubes'.
+//! (`target/bench`), with the ratios of gpytoolbox's CPU time to ours and of our wall time to
+//! each marching cubes', and the speed issue's targets (`TARGETS`) beside what was measured.
 
 mod child;
 mod report;
@@ -48,12 +51,25 @@ use rfta_geom::{Grid, Layout, TriMesh};
 use rfta_mesh::MeshIndex;
 
 /// The rows of the summary table, in order: method and threads.
-const REPORT_ORDER: [(&str, usize); 5] = [
+const REPORT_ORDER: [(&str, usize); 6] = [
     ("rfta-default", 2),
     ("rfta-fast", 2),
     ("mc", 1),
+    ("skimage", 1),
     ("rfta-default", 1),
     ("gpytoolbox", 1),
+];
+
+/// The largest N gpytoolbox runs at (the reference did not finish N = 50 within 20 minutes).
+const GPYTOOLBOX_MAX_N: usize = 30;
+
+/// The speed issue's targets for the default preset on 2 threads: N, the mean wall seconds per
+/// shape, and the peak resident memory in MB where one is set.
+const TARGETS: [(usize, f64, Option<f64>); 4] = [
+    (20, 0.3, None),
+    (50, 1.0, None),
+    (128, 3.0, Some(500.0)),
+    (256, 20.0, Some(2000.0)),
 ];
 
 /// One input grid.
@@ -62,6 +78,8 @@ struct Input {
     n: usize,
     path: PathBuf,
     gt: PathBuf,
+    /// One of the `--large` grids (not a dev-set grid).
+    large: bool,
 }
 
 /// At the first resolution, runs of the default preset per thread count, alternating.
@@ -102,10 +120,10 @@ pub(crate) struct Args {
     #[arg(long, value_name = "PATH")]
     python: Option<String>,
     /// Dev-set resolutions N.
-    #[arg(long, value_delimiter = ',', default_value = "20,30")]
+    #[arg(long, value_delimiter = ',', default_value = "20,50")]
     res: Vec<usize>,
     /// Large grids of one shape.
-    #[arg(long, value_delimiter = ',', default_value = "64,128")]
+    #[arg(long, value_delimiter = ',', default_value = "128,256")]
     large: Vec<usize>,
     /// The shape of the large grids.
     #[arg(long, default_value = "bunny")]
@@ -150,6 +168,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                     n,
                     path,
                     gt: dir.join("gt.obj"),
+                    large: false,
                 });
             }
         }
@@ -175,13 +194,21 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                 n,
                 path,
                 gt: large_gt.clone(),
+                large: true,
             });
         }
     }
     let python = find_python(a.python.as_deref(), &out)?;
     match &python {
-        Some(p) => println!("gpytoolbox: {}", p.display()),
-        None => println!("gpytoolbox: no Python with gpytoolbox found (--python PATH); skipped"),
+        Some(p) => println!(
+            "{}: gpytoolbox {}, scikit-image {}",
+            p.path.display(),
+            if p.gpytoolbox { "yes" } else { "no (skipped)" },
+            if p.skimage { "yes" } else { "no (skipped)" },
+        ),
+        None => println!(
+            "no Python with gpytoolbox or scikit-image found (--python PATH): both skipped"
+        ),
     }
     let exe = std::env::current_exe()?;
     let mut csv = String::from(
@@ -207,8 +234,15 @@ pub(crate) fn run(a: &Args) -> Result<()> {
         } else {
             these.push(("rfta-default", 2));
         }
-        these.extend([("rfta-fast", 2), ("mc", 1)]);
-        if python.is_some() && a.res.contains(&input.n) {
+        let dev = !input.large;
+        if dev {
+            these.push(("rfta-fast", 2));
+        }
+        these.push(("mc", 1));
+        if python.as_ref().is_some_and(|p| p.skimage) {
+            these.push(("skimage", 1));
+        }
+        if python.as_ref().is_some_and(|p| p.gpytoolbox) && dev && input.n <= GPYTOOLBOX_MAX_N {
             these.push(("gpytoolbox", 1));
         }
         // Per method and thread count, every run (the repeats in order).
@@ -218,7 +252,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                 "{}_n{}_{method}_t{threads}.ply",
                 input.shape, input.n
             ));
-            let r = child(&exe, python.as_deref(), method, threads, input, &mesh_path).and_then(
+            let r = child(&exe, python.as_ref(), method, threads, input, &mesh_path).and_then(
                 |(wall, cpu, rss_mb, steal)| {
                     if method == "ceiling" {
                         return Ok(Run {

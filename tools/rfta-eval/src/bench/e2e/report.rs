@@ -65,9 +65,9 @@ pub(super) fn report(
     let mut s = String::new();
     writeln!(
         s,
-        "| N | shapes | method | threads | wall s | CPU s | peak MB | Chamfer | gpytoolbox CPU / this | this wall / mc wall |"
+        "| N | shapes | method | threads | wall s | CPU s | peak MB | Chamfer | gpytoolbox CPU / this | this wall / mc wall | this wall / skimage wall |"
     )?;
-    writeln!(s, "|{}", "---|".repeat(10))?;
+    writeln!(s, "|{}", "---|".repeat(11))?;
     let mut ns: Vec<usize> = inputs.iter().map(|i| i.1).collect();
     ns.dedup();
     for &n in &ns {
@@ -110,17 +110,22 @@ pub(super) fn report(
             } else {
                 "-".into()
             };
-            let mc = mean(&|r| r.wall, "mc", 1);
-            let vs_mc = if m != "mc" && mc > 0.0 {
-                format!("{:.0}", mean(&|r| r.wall, m, t) / mc)
-            } else {
-                "-".into()
+            let wall = mean(&|r| r.wall, m, t);
+            let vs = |peer: &str| {
+                let all = ok.iter().all(|sh| find(sh, peer, 1).is_some());
+                let theirs = mean(&|r| r.wall, peer, 1);
+                if all && m != peer && theirs > 0.0 {
+                    ratio(wall / theirs)
+                } else {
+                    "-".into()
+                }
             };
+            let (vs_mc, vs_skimage) = (vs("mc"), vs("skimage"));
             writeln!(
                 s,
-                "| {n} | {} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {vs_gpy} | {vs_mc} |",
+                "| {n} | {} | {m} | {t} | {:.2} | {:.2} | {:.0} | {:.5} | {vs_gpy} | {vs_mc} | {vs_skimage} |",
                 ok.len(),
-                mean(&|r| r.wall, m, t),
+                wall,
                 cpu,
                 ok.iter()
                     .filter_map(|sh| find(sh, m, t))
@@ -178,6 +183,7 @@ pub(super) fn report(
             )?;
         }
     }
+    targets(&mut s, rows, &ns)?;
     writeln!(
         s,
         "| shape | N | method | threads | wall s | CPU s | peak MB | Chamfer | faces | watertight |"
@@ -204,6 +210,61 @@ pub(super) fn report(
         }
     }
     Ok(s)
+}
+
+/// A ratio: two decimals below 10 (`0.85`, `3.46`), whole numbers from there (`12`, `850`).
+fn ratio(x: f64) -> String {
+    if x < 10.0 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.0}")
+    }
+}
+
+/// The speed issue's targets ([`TARGETS`]) beside the default preset's runs on 2 threads at each N
+/// this run has: mean wall time per shape and the largest peak memory, and whether both are met.
+fn targets(
+    s: &mut String,
+    rows: &[(String, usize, String, usize, Result<Run>)],
+    ns: &[usize],
+) -> Result<()> {
+    let mut lines = Vec::new();
+    for &(n, wall_target, mb_target) in &TARGETS {
+        let runs: Vec<&Run> = rows
+            .iter()
+            .filter(|(_, nn, m, t, _)| *nn == n && m == "rfta-default" && *t == 2)
+            .filter_map(|(_, _, _, _, r)| r.as_ref().ok())
+            .collect();
+        if !ns.contains(&n) || runs.is_empty() {
+            continue;
+        }
+        let wall = runs.iter().map(|r| r.wall).sum::<f64>() / runs.len() as f64;
+        let mb = runs.iter().map(|r| r.rss_mb).fold(0.0, f64::max);
+        let met = wall <= wall_target && mb_target.is_none_or(|t| mb <= t);
+        lines.push(format!(
+            "| {n} | {} | {wall:.2} | {wall_target} | {mb:.0} | {} | {} |",
+            runs.len(),
+            mb_target.map_or("-".into(), |t| format!("{t:.0}")),
+            if met { "met" } else { "**not met**" },
+        ));
+    }
+    if lines.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        s,
+        "The speed issue's targets for the default preset on 2 threads (mean wall seconds per shape, the largest peak memory):\n"
+    )?;
+    writeln!(
+        s,
+        "| N | shapes | wall s | target s | peak MB | target MB | |"
+    )?;
+    writeln!(s, "|{}", "---|".repeat(7))?;
+    for l in lines {
+        writeln!(s, "{l}")?;
+    }
+    writeln!(s)?;
+    Ok(())
 }
 
 /// The 1- and 2-thread runs of one method at one resolution, over the shapes that have both:
@@ -326,6 +387,50 @@ mod tests {
             steals: steals.to_vec(),
             hash: 0,
         })
+    }
+
+    #[test]
+    fn the_targets_table_says_which_targets_the_default_meets() {
+        let row = |shape: &str, n, method: &str, threads, wall: f64, mb: f64| {
+            let mut r = run(&[wall], &[0.0]).expect("a run");
+            r.rss_mb = mb;
+            (shape.to_string(), n, method.to_string(), threads, Ok(r))
+        };
+        let rows = vec![
+            // N = 20: mean (0.2 + 0.3) / 2 = 0.25 s <= 0.3 s, no memory target.
+            row("a", 20, "rfta-default", 2, 0.2, 900.0),
+            row("b", 20, "rfta-default", 2, 0.3, 40.0),
+            // Neither the 1-thread run nor another method counts.
+            row("a", 20, "rfta-default", 1, 9.0, 40.0),
+            row("a", 20, "mc", 1, 9.0, 40.0),
+            // 129^3: fast enough, but 600 MB > 500 MB.
+            row("bunny", 128, "rfta-default", 2, 2.0, 600.0),
+            // N = 50: 1.5 s > 1 s.
+            row("a", 50, "rfta-default", 2, 1.5, 10.0),
+        ];
+        let mut s = String::new();
+        targets(&mut s, &rows, &[20, 50, 128]).expect("written");
+        assert!(s.contains("| 20 | 2 | 0.25 | 0.3 | 900 | - | met |"), "{s}");
+        assert!(
+            s.contains("| 50 | 1 | 1.50 | 1 | 10 | - | **not met** |"),
+            "{s}"
+        );
+        assert!(
+            s.contains("| 128 | 1 | 2.00 | 3 | 600 | 500 | **not met** |"),
+            "{s}"
+        );
+        // No row for a size this run did not have.
+        assert!(!s.contains("| 256 |"), "{s}");
+        let mut none = String::new();
+        targets(&mut none, &rows, &[30]).expect("written");
+        assert!(none.is_empty());
+    }
+
+    #[test]
+    fn ratios_have_two_decimals_below_ten_and_none_above() {
+        assert_eq!(ratio(0.0712), "0.07");
+        assert_eq!(ratio(3.456), "3.46");
+        assert_eq!(ratio(849.6), "850");
     }
 
     #[test]
