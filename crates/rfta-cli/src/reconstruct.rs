@@ -152,6 +152,12 @@ pub(crate) struct Tuning {
     #[arg(long)]
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     keep_cavities: bool,
+    /// Keep the handles less than about a spacing across that no sample confirms; by default, on
+    /// a grid, such a handle is cut along its loop (a bar through empty space cut, a tunnel
+    /// filled) unless a sample of its side lies next to it. Scattered samples: kept.
+    #[arg(long)]
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    keep_thin_handles: bool,
     /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
     /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
     /// samples always do).

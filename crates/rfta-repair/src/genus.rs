@@ -47,7 +47,7 @@ pub fn to_genus(
             bound *= 2.0;
             continue;
         }
-        let this_pass = cut_disjoint(mesh, &loops.loops, CUT_GAP * h, |_, cut| cut < excess);
+        let this_pass = cut_disjoint(mesh, &loops.loops, CUT_GAP * h, |_, cut| cut < excess).len();
         if this_pass == 0 {
             break;
         }
@@ -60,7 +60,8 @@ pub fn to_genus(
 /// shortest first) for which `wanted(k, cut)` holds (`k` the loop's index, `cut` the number cut
 /// so far) and that share no vertex with one cut before it in the pass, the two sides `gap`
 /// apart ([`rfta_mesh::cut_along`]). Loops of one basis that share no vertex are disjoint and independent: no
-/// set of them separates the surface, so each cut takes one handle. Returns the number cut.
+/// set of them separates the surface, so each cut takes one handle. Returns the indices of the
+/// loops cut, ascending.
 ///
 /// # Example
 /// ```
@@ -69,7 +70,7 @@ pub fn to_genus(
 /// // A torus whose tube is 0.63 around: its one short loop cut, genus 1 to 0.
 /// let mut torus = shapes::torus(1.0, 0.1, 64, 16);
 /// let loops = rfta_mesh::short_loops(&torus, 1.0).expect("closed");
-/// assert_eq!(rfta_repair::cut_disjoint(&mut torus, &loops.loops, 0.01, |_, _| true), 1);
+/// assert_eq!(rfta_repair::cut_disjoint(&mut torus, &loops.loops, 0.01, |_, _| true), [0]);
 /// assert_eq!(rfta_mesh::Topology::of(&torus).genus(), Some(0));
 /// ```
 pub fn cut_disjoint(
@@ -77,11 +78,11 @@ pub fn cut_disjoint(
     cycles: &[Vec<u32>],
     gap: f64,
     mut wanted: impl FnMut(usize, usize) -> bool,
-) -> usize {
+) -> Vec<usize> {
     let mut touched = vec![false; mesh.vertices.len()];
-    let mut cut = 0;
+    let mut cut = Vec::new();
     for (k, cycle) in cycles.iter().enumerate() {
-        if !wanted(k, cut) {
+        if !wanted(k, cut.len()) {
             continue;
         }
         if cycle
@@ -94,7 +95,7 @@ pub fn cut_disjoint(
             for &v in cycle {
                 touched[v as usize] = true;
             }
-            cut += 1;
+            cut.push(k);
         }
     }
     cut
@@ -125,7 +126,7 @@ pub fn cut_sub_cell_handles(
         let Some(loops) = rfta_mesh::short_loops(mesh, cells * finest_cell) else {
             break;
         };
-        let this_pass = cut_disjoint(mesh, &loops.loops, gap, |_, _| true);
+        let this_pass = cut_disjoint(mesh, &loops.loops, gap, |_, _| true).len();
         if this_pass == 0 {
             break;
         }

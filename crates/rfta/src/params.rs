@@ -101,6 +101,14 @@ pub struct Params {
     /// by inside samples all round (a hollow ball) is kept either way. Scattered samples: kept.
     /// In 2D the same for the holes of the curve ([`crate::plane`], `rfta_plane::holes`).
     pub keep_cavities: bool,
+    /// Keep the handles thinner than the samples resolve that no sample confirms. By default,
+    /// on a grid, a handle whose loop is shorter than `THIN_LOOP` (pi) spacings (a bar or a tunnel
+    /// less than about a spacing across) is cut along its loop and both sides capped unless a
+    /// sample of its side lies next to its centre (material in a bar, empty space in a tunnel):
+    /// the samples cannot tell it from none, and marching cubes of the same samples makes none
+    /// ([`crate::RepairReport::thin_handle_loops`]). Scattered samples: kept; an adaptive run
+    /// asks its function instead.
+    pub keep_thin_handles: bool,
     /// Where the initial tangency points come from: on grids, by default, the closest surface
     /// point each sample's gradient points to ([`InitialPoints::Gradient`]); the paper's
     /// rasterized empty space ([`InitialPoints::Raster`], always for scattered samples).
@@ -164,6 +172,7 @@ impl Default for Params {
             min_island: 2.0,
             genus: None,
             keep_cavities: false,
+            keep_thin_handles: false,
             initial: InitialPoints::Gradient,
             field: Field::Auto,
             simplify: true,

@@ -294,9 +294,14 @@ pub struct RepairReport {
     /// Handles thinner than the samples resolve whose loop's centre an adaptive run asked the
     /// function at ([`crate::adaptive`]; 0 otherwise).
     pub thin_handles_asked: usize,
-    /// Of those, the ones cut: the function put the centre on the other side than the mesh (a bar
-    /// through empty space, a tunnel through material).
+    /// Handles thinner than the samples resolve cut because nothing confirms them: on a grid no
+    /// sample of their side lies next to them (unless [`crate::Params::keep_thin_handles`]); in an
+    /// adaptive run, of those asked about, also the function put the centre on the other side
+    /// than the mesh (a bar through empty space, a tunnel through material).
     pub thin_handles_cut: usize,
+    /// The loops around those handles, in sample spacings (the finest, in an adaptive run),
+    /// shortest first in each pass.
+    pub thin_handle_loops: Vec<f64>,
     /// Closed components of the output that face inward: cavities in the solid, each around
     /// samples outside the shape (the island rule keeps no other). Unless
     /// [`crate::Params::keep_cavities`], those left are walled in by inside samples (a void the

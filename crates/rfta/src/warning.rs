@@ -79,6 +79,12 @@ pub enum Warning {
         /// The shortest, in spacings.
         shortest: f64,
     },
+    /// Handles thinner than the samples resolve that no sample confirms, cut
+    /// ([`crate::Params::keep_thin_handles`]).
+    ThinHandlesCut {
+        /// Their loops, in spacings.
+        loops: Vec<f64>,
+    },
     /// More than a twentieth of the spheres ended without a tangency point.
     SpheresWithoutPoint {
         /// Spheres without a point.
@@ -171,6 +177,15 @@ impl fmt::Display for Warning {
                 "the mesh has {loops} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, which the samples can neither confirm nor rule out; finer samples can",
                 consistency::THIN_LOOP
             ),
+            Self::ThinHandlesCut { loops } => {
+                let lengths: Vec<String> = loops.iter().map(|l| format!("{l:.2}")).collect();
+                write!(
+                    f,
+                    "cut {} handle(s) less than about a spacing across that no sample confirms (loops of {} spacings around): a bar the samples do not show cut through, a tunnel they do not show filled, as marching cubes of the same samples leaves them; finer samples can show them, keep_thin_handles (--keep-thin-handles) keeps them",
+                    loops.len(),
+                    lengths.join(", ")
+                )
+            }
             Self::SpheresWithoutPoint { without, eligible } => write!(
                 f,
                 "{without} of {eligible} spheres ended without a tangency point (clamped, zero-valued, or covered by other spheres)"
@@ -214,6 +229,14 @@ mod tests {
             kept: true,
         };
         assert!(w.to_string().contains("1 cavity around"));
+        let w = Warning::ThinHandlesCut {
+            loops: vec![1.234, 2.0],
+        };
+        assert!(
+            w.to_string()
+                .starts_with("cut 2 handle(s) less than about a spacing across that no sample confirms (loops of 1.23, 2.00 spacings around)"),
+            "{w}"
+        );
         assert_eq!(
             serde_json::to_value(Warning::ZeroAreaFaces {
                 faces: 2,

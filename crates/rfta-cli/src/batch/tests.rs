@@ -81,6 +81,7 @@ fn every_reconstruct_option_reaches_the_rows() {
         "--genus",
         "0",
         "--keep-cavities",
+        "--keep-thin-handles",
         "--initial",
         "raster",
         "--field",

@@ -273,6 +273,7 @@ def reconstruct(
     min_island: Optional[float] = None,
     genus: Optional[int] = None,
     keep_cavities: bool = False,
+    keep_thin_handles: bool = False,
     initial: Optional[str] = None,
     field: Optional[str] = None,
     simplify: bool = True,
@@ -310,7 +311,7 @@ def reconstruct(
     budget : int, optional
         With ``sdf``: the most evaluations (default 30000; at least 125).
     rounds, max_points_per_sphere, seed, clamp, depth, screening, owner_band,
-    raster_resolution, min_island, genus, keep_cavities, initial, threads
+    raster_resolution, min_island, genus, keep_cavities, keep_thin_handles, initial, threads
         ``rfta::Params``' settings of these names (its serde form, the one table of names).
         ``rfta reconstruct``'s options (``rfta reconstruct --help``) are the same with dashes
         (``--max-points-per-sphere``, ``--owner-band``), except ``screening``, which has no
@@ -359,7 +360,7 @@ def reconstruct(
             clamp=clamp, check=check, depth=depth, screening=screening,
             owner_band=owner_band, raster_resolution=raster_resolution,
             min_island=min_island, genus=genus, keep_cavities=keep_cavities,
-            initial=initial, field=field, simplify=simplify,
+            keep_thin_handles=keep_thin_handles, initial=initial, field=field, simplify=simplify,
             simplify_tolerance=simplify_tolerance, faces=faces, threads=threads,
         )
         V, F, P, N, report, adaptive, positions, values = _rfta.reconstruct_adaptive(
@@ -397,6 +398,7 @@ def reconstruct(
         min_island=min_island,
         genus=genus,
         keep_cavities=keep_cavities,
+        keep_thin_handles=keep_thin_handles,
         initial=initial,
         field=field,
         simplify=simplify,

@@ -330,9 +330,14 @@ fn final_pass(
                 settle::settle_components(mesh, &samples, small, left, &mut ask)?;
             repair.small_components_asked = asked;
             repair.small_components_removed = removed;
-            let s = settle::settle(mesh, &samples, bound, gap, left - 2 * asked, &mut ask)?;
+            let oracle = crate::finish::handles::Oracle {
+                ask: &mut ask,
+                max_asks: left - 2 * asked,
+            };
+            let s = crate::finish::handles::settle(mesh, &samples, bound, gap, Some(oracle))?;
             repair.thin_handles_asked = s.asked;
-            repair.thin_handles_cut = s.cut;
+            repair.thin_handles_cut = s.cut.len();
+            repair.thin_handle_loops = s.cut.iter().map(|l| l / lattice.finest_spacing()).collect();
             repair.cavities = rfta_mesh::cavities(mesh).len();
             Ok::<_, Error>(())
         })?;

@@ -9,6 +9,7 @@
 //! The repair steps are `rfta-repair`'s; `islands.rs` holds the verdicts it removes components
 //! by.
 
+pub(crate) mod handles;
 mod islands;
 mod simplify;
 #[cfg(test)]
@@ -289,6 +290,21 @@ fn repair_once(
         CUT_GAP * samples.spacing(),
         consistency::THIN_LOOP_MAX_GENUS,
     );
+    // Handles thinner than a spacing that no sample confirms (grids; an adaptive run asks its
+    // function instead), also before the clearing.
+    let h = samples.spacing();
+    if !params.keep_thin_handles && samples.as_grid().is_some() {
+        let thin = consistency::THIN_LOOP * h;
+        if let Ok(s) = handles::settle(&mut mesh, samples, thin, CUT_GAP * h, None) {
+            report.thin_handles_cut = s.cut.len();
+            report.thin_handle_loops = s.cut.iter().map(|l| l / h).collect();
+        }
+        if !report.thin_handle_loops.is_empty() {
+            journal.warnings.push(Warning::ThinHandlesCut {
+                loops: report.thin_handle_loops.clone(),
+            });
+        }
+    }
     let mut topology = t.elapsed();
     crate::pool::waiters_back();
     let t = Instant::now();
@@ -302,7 +318,6 @@ fn repair_once(
     let near = SphereTree::with_indices(&unit.spheres, &near);
     // Dents before clearing the spheres (which can then clear what a dent's faces enter) and
     // after it (for the samples a move out of a sphere left on the wrong side).
-    let h = samples.spacing();
     report.dents = dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
     let before = mesh.vertices.clone();
     // A level set's values are not distances: its spheres guarantee no empty space.
