@@ -152,9 +152,10 @@ pub(crate) struct Tuning {
     #[arg(long)]
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     keep_cavities: bool,
-    /// Keep the handles less than about a spacing across that no sample confirms; by default, on
-    /// a grid, such a handle is cut along its loop (a bar through empty space cut, a tunnel
-    /// filled) unless a sample of its side lies next to it. Scattered samples: kept.
+    /// Keep the handles less than about a spacing across that no sample confirms, and the pieces
+    /// less than a spacing across that no sample lies in; by default, on a grid, such a handle is
+    /// cut along its loop (a bar through empty space cut, a tunnel filled) unless a sample of its
+    /// side lies next to it, and such a piece removed. Scattered samples: kept.
     #[arg(long)]
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     keep_thin_handles: bool,

@@ -83,7 +83,9 @@ pub struct Params {
     /// them all. Screened Poisson leaves small closed islands next to outlying tangency points
     /// (the reference's outputs have them too); a thin part the grid resolves only in pieces
     /// leaves small islands around its inside samples or between them where the samples' spheres
-    /// touch it, and those stay. Size alone removes nothing. Default 2.
+    /// touch it, and those stay, if at least a spacing across (smaller ones, with no sample in
+    /// them, are below what the samples resolve and go unless [`Params::keep_thin_handles`]).
+    /// Size alone removes nothing. Default 2.
     pub min_island: f64,
     /// The shape's genus, when the caller knows it (a scanned organ: 0): the output is made one
     /// surface of at most this genus. Every other component is joined to the largest by a tube
@@ -101,7 +103,8 @@ pub struct Params {
     /// by inside samples all round (a hollow ball) is kept either way. Scattered samples: kept.
     /// In 2D the same for the holes of the curve ([`crate::plane`], `rfta_plane::holes`).
     pub keep_cavities: bool,
-    /// Keep the handles thinner than the samples resolve that no sample confirms. By default,
+    /// Keep the handles thinner than the samples resolve that no sample confirms, and the small
+    /// parts less than a spacing across that no sample lies in ([`Params::min_island`]). By default,
     /// on a grid, a handle whose loop is shorter than `THIN_LOOP` (pi) spacings (a bar or a tunnel
     /// less than about a spacing across) is cut along its loop and both sides capped unless a
     /// sample of its side lies next to its centre (material in a bar, empty space in a tunnel):

@@ -104,13 +104,18 @@ pub(super) fn judge(
         return Some(Island::Unsupported);
     }
     // A small closed component needs a witness: a sample inside it, or, for a part (not a
-    // cavity), some sample's sphere that reaches it and no farther part of the surface: a thin
-    // part between the samples, which no sample lies in, is where the spheres around it touch
-    // (without it they would have gaps). A cavity no sample lies in is a sealed bubble the
-    // samples do not show, whatever spheres its wall touches.
+    // cavity) at least a spacing across, some sample's sphere that reaches it and no farther
+    // part of the surface: a thin part between the samples, which no sample lies in, is where the
+    // spheres around it touch (without it they would have gaps). A part less than a spacing
+    // across that no sample lies in is below what the samples resolve (marching cubes of them
+    // makes none): it goes, unless thin parts are kept ([`Params::keep_thin_handles`]). A cavity
+    // no sample lies in is a sealed bubble the samples do not show, whatever spheres its wall
+    // touches.
+    let resolved = params.keep_thin_handles || diag >= h;
     if diag < params.min_island * h
         && !encloses_witness()
         && (signed_volume(mesh, faces) < 0.0
+            || !resolved
             || !closes_gap(unit, &tree, main, mesh, faces, &vertices))
     {
         return Some(Island::Small);

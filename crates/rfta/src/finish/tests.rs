@@ -265,6 +265,25 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
         judge_on(&plain, &ball(thin_c, 0.03)),
         Some(Island::Unsupported)
     );
+    // A thinner part, less than a spacing across (its box's diagonal 0.07), between the
+    // samples: below what they resolve, it goes, unless thin parts are kept.
+    let thinner = samples(&|p| ball_sdf(p).min((p - thin_c).length() - 0.02));
+    assert_eq!(judge_on(&thinner, &ball(thin_c, 0.02)), Some(Island::Small));
+    let keep = Params {
+        keep_thin_handles: true,
+        ..Params::default()
+    };
+    let unit = UnitBox::new(&thinner, None, None);
+    let mut main = ball(DVec3::ZERO, 0.5);
+    main.map_vertices(|v| unit.to_unit(v));
+    let main = rfta_mesh::MeshIndex::new(&main).expect("index");
+    let piece = ball(thin_c, 0.02);
+    let faces: Vec<usize> = (0..piece.faces.len()).collect();
+    let bounds = Aabb::from_points(&piece.vertices);
+    assert_eq!(
+        judge(&unit, &keep, Some(&main), &piece, &faces, bounds),
+        None
+    );
     // Half a spacing off the thin part, the samples' spheres reach it no more.
     assert_eq!(
         judge_on(&thin, &ball(thin_c + DVec3::new(0.0, -0.3, 0.0), 0.03)),
