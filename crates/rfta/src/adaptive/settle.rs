@@ -123,16 +123,8 @@ fn witnessed(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::finish::handles::tests::far;
     use rfta_geom::shapes;
-
-    /// Two samples far from every test shape: nothing witnessed.
-    fn far() -> SdfSamples {
-        SdfSamples::scattered(
-            vec![DVec3::splat(10.0), DVec3::splat(-10.0)],
-            vec![1.0, -1.0],
-        )
-        .expect("samples")
-    }
 
     /// Beside a large sphere, a small ball the function puts outside is removed, one it puts
     /// inside kept; in the sphere, a small inward shell where the function says material is

@@ -145,12 +145,13 @@ fn witnessed(samples: &SdfSamples, c: DVec3, reach: f64, inside: bool) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rfta_geom::{Grid, shapes};
 
-    /// Two samples far from every test shape: nothing witnessed.
-    fn far() -> SdfSamples {
+    /// Two samples far from every test shape: nothing witnessed (the adaptive mode's tests use
+    /// it too).
+    pub(crate) fn far() -> SdfSamples {
         SdfSamples::scattered(
             vec![DVec3::splat(10.0), DVec3::splat(-10.0)],
             vec![1.0, -1.0],
