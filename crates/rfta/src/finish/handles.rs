@@ -211,15 +211,16 @@ pub(crate) mod tests {
         assert_eq!((s.asked, s.cut.len()), (1, 0));
     }
 
-    /// A ring of radius 0.5 around the z axis at height `z`, its tube of radius
-    /// `0.025 + 0.01 (1 - cos theta)`: thinnest (0.025, its loop 0.157 around) where it crosses
+    /// Two close parts joined by a thread: a ring of radius 0.5 around the z axis at height `z`,
+    /// its tube of radius `0.025 + 0.05 (1 - cos theta)`, a thick C (1.25 spacings across where
+    /// widest) whose two ends meet in a thread 0.025 thick (its loop 0.157 around) where it crosses
     /// the x axis.
     fn ring(z: f64) -> TriMesh {
         let mut ring = shapes::torus(0.5, 0.02, 96, 16);
         ring.map_vertices(|v| {
             let theta = v.y.atan2(v.x);
             let core = DVec3::new(0.5 * theta.cos(), 0.5 * theta.sin(), 0.0);
-            let r = 0.025 + 0.01 * (1.0 - theta.cos());
+            let r = 0.025 + 0.05 * (1.0 - theta.cos());
             core + (v - core) * (r / 0.02) + DVec3::new(0.0, 0.0, z)
         });
         ring
@@ -235,10 +236,10 @@ pub(crate) mod tests {
         SdfSamples::grid(grid, values).expect("samples")
     }
 
-    /// On a grid, with no function to ask: a thin ring whose thinnest part holds a sample (its
-    /// core passes through the grid point (0.5, 0, 0)) keeps its handle; the same ring half a
-    /// spacing higher, between the grid's planes with no sample in its tube, is cut where it is
-    /// thinnest, and the result is closed and of genus 0.
+    /// On a grid, with no function to ask: the thread between the C's two ends, when a sample
+    /// lies in it (its core passes through the grid point (0.5, 0, 0)), keeps its handle; the
+    /// same shape half a spacing higher, where the thread holds no sample (the C's thick parts
+    /// hold many), is cut at the thread, and the result is closed and of genus 0.
     #[test]
     fn on_a_grid_a_thin_handle_stays_only_where_a_sample_of_its_side_lies_in_it() {
         let h = 0.1;
@@ -256,8 +257,8 @@ pub(crate) mod tests {
         let mut free = ring(0.05);
         let samples = sampled(&free);
         assert!(
-            samples.values().iter().all(|&v| v > 0.0),
-            "no sample in the tube"
+            samples.values().iter().filter(|&&v| v < 0.0).count() > 20,
+            "samples in the thick parts"
         );
         let s = settle(&mut free, &samples, bound, 0.05 * h, None).expect("settle");
         assert_eq!(s.asked, 0);
