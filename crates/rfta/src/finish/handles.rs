@@ -91,7 +91,8 @@ pub(crate) fn settle(
             }
             None => None,
         };
-        let made = MeshIndex::new(mesh)?.signed_distances(&centres);
+        let mut index = MeshIndex::new(mesh)?;
+        let made = index.signed_distances(&centres);
         // A handle is an artifact unless a sample or the function confirms it.
         let artifact = |k: usize| {
             let Some(&d) = made.get(k) else {
@@ -112,7 +113,20 @@ pub(crate) fn settle(
             let deep = if d < 0.0 { -f } else { f };
             !(DEPTH_RANGE[0] * r..=DEPTH_RANGE[1] * r).contains(&deep)
         };
-        let cut = rfta_repair::cut_disjoint(mesh, &cycles, gap, |k, _| artifact(k));
+        // A cut is kept only if it puts no sample with a side on the wrong side; the index of
+        // the mesh before it is rebuilt after each cut kept.
+        let mut stale = false;
+        let keeps = |before: &TriMesh, after: &TriMesh, k: usize| {
+            if stale {
+                match MeshIndex::new(before) {
+                    Ok(i) => index = i,
+                    Err(_) => return false,
+                }
+            }
+            stale = keeps_sides(before, &index, after, &cycles[k], samples);
+            stale
+        };
+        let cut = rfta_repair::cut_disjoint(mesh, &cycles, gap, |k, _| artifact(k), keeps);
         settled.cut.extend(cut.iter().map(|&k| loops.lengths[k]));
         if cut.is_empty() {
             break;
@@ -121,13 +135,82 @@ pub(crate) fn settle(
     Ok(settled)
 }
 
+/// Whether cutting `before` (indexed by `index`) along `cycle` into `after` leaves every sample
+/// with a side (`|s| > SIGN_MARGIN h`) that was on its side on it. The cut changes only the faces
+/// at the loop's vertices (moved apart) and the caps (new vertices), so the winding number
+/// changes by theirs after less theirs before, and only for samples within their reach.
+fn keeps_sides(
+    before: &TriMesh,
+    index: &MeshIndex,
+    after: &TriMesh,
+    cycle: &[u32],
+    samples: &SdfSamples,
+) -> bool {
+    let n = before.vertices.len() as u32;
+    let on_loop = {
+        let mut on = vec![false; before.vertices.len()];
+        for &v in cycle {
+            on[v as usize] = true;
+        }
+        on
+    };
+    let changed = |mesh: &TriMesh| -> Vec<[DVec3; 3]> {
+        (0..mesh.n_faces())
+            .filter(|&f| mesh.faces[f].iter().any(|&v| v >= n || on_loop[v as usize]))
+            .map(|f| mesh.triangle(f))
+            .collect()
+    };
+    let (old, new) = (changed(before), changed(after));
+    let c = cycle
+        .iter()
+        .map(|&v| before.vertices[v as usize])
+        .sum::<DVec3>()
+        / cycle.len() as f64;
+    let reach = old
+        .iter()
+        .chain(&new)
+        .flatten()
+        .map(|p| p.distance(c))
+        .fold(0.0, f64::max)
+        * (1.0 + 1e-9)
+        + 1e-12;
+    let margin = crate::consistency::SIGN_MARGIN * samples.spacing();
+    let turned = |i: usize| {
+        let (p, v) = (samples.position(i), samples.values()[i]);
+        if v.abs() <= margin {
+            return false;
+        }
+        let omega = |tris: &[[DVec3; 3]]| {
+            tris.iter()
+                .map(|&[a, b, t]| rfta_geom::kernels::solid_angle(p, a, b, t))
+                .sum::<f64>()
+        };
+        let delta = (omega(&new) - omega(&old)) / (4.0 * std::f64::consts::PI);
+        let w = index.winding_number(p);
+        let right = |w: f64| (w > 0.5) == (v < 0.0);
+        right(w) && !right(w + delta)
+    };
+    !any_near(samples, c, reach, turned)
+}
+
 /// Whether a sample of the handle's side (inside for a bar, `inside`; outside for a tunnel)
 /// lies within `reach` of its centre `c`: on a grid the samples in the box around it, else all.
 fn witnessed(samples: &SdfSamples, c: DVec3, reach: f64, inside: bool) -> bool {
-    let of_side = |i: usize| {
+    any_near(samples, c, reach, |i| {
         let v = samples.values()[i];
-        v != 0.0 && (v < 0.0) == inside && samples.position(i).distance(c) < reach
-    };
+        v != 0.0 && (v < 0.0) == inside
+    })
+}
+
+/// Whether `pred` holds for a sample within `reach` of `c`: on a grid the samples in the box
+/// around it, else all.
+fn any_near(
+    samples: &SdfSamples,
+    c: DVec3,
+    reach: f64,
+    mut pred: impl FnMut(usize) -> bool,
+) -> bool {
+    let mut of_side = |i: usize| samples.position(i).distance(c) < reach && pred(i);
     match samples.as_grid() {
         Some(grid) => {
             let (o, h, dims) = (grid.origin(), grid.spacing(), grid.dims());
@@ -276,6 +359,38 @@ pub(crate) mod tests {
                 .all(|v| v.y.abs() < 0.1 && v.x > 0.0),
             "the cut is where the ring is thinnest"
         );
+    }
+
+    /// A cut through the thread leaves an inside sample at the thread's centre in the gap between
+    /// the caps, outside: refused; inside samples elsewhere in the C keep their side: kept.
+    #[test]
+    fn a_cut_that_turns_a_sample_is_refused() {
+        let before = ring(0.0);
+        let loops = rfta_mesh::short_loops(&before, 0.3).expect("closed");
+        assert_eq!(loops.loops.len(), 1);
+        let cycle = &loops.loops[0];
+        let mut after = before.clone();
+        assert!(rfta_mesh::cut_along(&mut after, cycle, 0.005));
+        let index = MeshIndex::new(&before).expect("index");
+        let centre = cycle
+            .iter()
+            .map(|&v| before.vertices[v as usize])
+            .sum::<DVec3>()
+            / cycle.len() as f64;
+        // The sample, and one far outside (samples come two or more).
+        let at = |p: DVec3| {
+            SdfSamples::scattered(vec![p, DVec3::splat(10.0)], vec![-0.02, 1.0])
+                .and_then(|s| s.with_spacing(0.1))
+                .expect("samples")
+        };
+        assert!(!keeps_sides(&before, &index, &after, cycle, &at(centre)));
+        assert!(keeps_sides(
+            &before,
+            &index,
+            &after,
+            cycle,
+            &at(DVec3::new(-0.5, 0.0, 0.0))
+        ));
     }
 
     /// The grid's witness search finds the samples a search of all of them finds.
