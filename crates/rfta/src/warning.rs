@@ -78,6 +78,10 @@ pub enum Warning {
         loops: usize,
         /// The shortest, in spacings.
         shortest: f64,
+        /// Whether they are the ones the samples keep: the handles no sample confirms were cut
+        /// (a grid, unless [`crate::Params::keep_thin_handles`]), so a sample next to each of
+        /// these confirms it or cutting it would put one on the wrong side.
+        kept_by_samples: bool,
     },
     /// Handles thinner than the samples resolve that no sample confirms, cut
     /// ([`crate::Params::keep_thin_handles`]).
@@ -172,11 +176,28 @@ impl fmt::Display for Warning {
                     )
                 }
             }
-            Self::ThinHandles { loops, shortest } => write!(
-                f,
-                "the mesh has {loops} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, which the samples can neither confirm nor rule out; finer samples can",
-                consistency::THIN_LOOP
-            ),
+            Self::ThinHandles {
+                loops,
+                shortest,
+                kept_by_samples,
+            } => {
+                write!(
+                    f,
+                    "the mesh has {loops} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, ",
+                    consistency::THIN_LOOP
+                )?;
+                if *kept_by_samples {
+                    write!(
+                        f,
+                        "kept because a sample next to each confirms it or cutting it would put one on the wrong side; finer samples can tell more"
+                    )
+                } else {
+                    write!(
+                        f,
+                        "which the samples can neither confirm nor rule out; finer samples can"
+                    )
+                }
+            }
             Self::ThinHandlesCut { loops } => {
                 let lengths: Vec<String> = loops.iter().map(|l| format!("{l:.2}")).collect();
                 write!(
@@ -229,6 +250,25 @@ mod tests {
             kept: true,
         };
         assert!(w.to_string().contains("1 cavity around"));
+        let w = Warning::ThinHandles {
+            loops: 2,
+            shortest: 0.5,
+            kept_by_samples: true,
+        };
+        assert!(
+            w.to_string().contains("(the shortest 0.50)")
+                && w.to_string().contains("kept because a sample"),
+            "{w}"
+        );
+        let w = Warning::ThinHandles {
+            loops: 2,
+            shortest: 0.5,
+            kept_by_samples: false,
+        };
+        assert!(
+            w.to_string().contains("can neither confirm nor rule out"),
+            "{w}"
+        );
         let w = Warning::ThinHandlesCut {
             loops: vec![1.234, 2.0],
         };

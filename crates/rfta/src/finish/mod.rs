@@ -429,6 +429,7 @@ fn measure(
         journal.warnings.push(Warning::ThinHandles {
             loops: c.thin_loops.len(),
             shortest,
+            kept_by_samples: !params.keep_thin_handles && samples.as_grid().is_some(),
         });
     }
     // A few spheres covered by their neighbours are normal (the reference has them too); a
