@@ -180,24 +180,7 @@ impl fmt::Display for Warning {
                 loops,
                 shortest,
                 kept_by_samples,
-            } => {
-                write!(
-                    f,
-                    "the mesh has {loops} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, ",
-                    consistency::THIN_LOOP
-                )?;
-                if *kept_by_samples {
-                    write!(
-                        f,
-                        "kept because a sample next to each confirms it or cutting it would put one on the wrong side; finer samples can tell more"
-                    )
-                } else {
-                    write!(
-                        f,
-                        "which the samples can neither confirm nor rule out; finer samples can"
-                    )
-                }
-            }
+            } => thin_handles(f, *loops, *shortest, *kept_by_samples),
             Self::ThinHandlesCut { loops } => {
                 let lengths: Vec<String> = loops.iter().map(|l| format!("{l:.2}")).collect();
                 write!(
@@ -223,6 +206,31 @@ impl fmt::Display for Warning {
                 "the mesh has {faces} faces of zero area ({degenerate} with a repeated vertex)"
             ),
         }
+    }
+}
+
+/// [`Warning::ThinHandles`]' sentence.
+fn thin_handles(
+    f: &mut fmt::Formatter<'_>,
+    loops: usize,
+    shortest: f64,
+    kept: bool,
+) -> fmt::Result {
+    write!(
+        f,
+        "the mesh has {loops} loop(s) around handles shorter than {:.2} spacings (the shortest {shortest:.2}): parts less than about a spacing across, ",
+        consistency::THIN_LOOP
+    )?;
+    if kept {
+        write!(
+            f,
+            "kept because a sample next to each confirms it or cutting it would put one on the wrong side; finer samples can tell more"
+        )
+    } else {
+        write!(
+            f,
+            "which the samples can neither confirm nor rule out; finer samples can"
+        )
     }
 }
 
