@@ -47,14 +47,8 @@ pub fn to_genus(
             bound *= 2.0;
             continue;
         }
-        let this_pass = cut_disjoint(
-            mesh,
-            &loops.loops,
-            CUT_GAP * h,
-            |_, cut| cut < excess,
-            |_, _, _| true,
-        )
-        .len();
+        let this_pass =
+            cut_disjoint(mesh, &loops.loops, CUT_GAP * h, |_, cut| cut < excess, None).len();
         if this_pass == 0 {
             break;
         }
@@ -63,11 +57,14 @@ pub fn to_genus(
     (joined, cut)
 }
 
+/// A test of one cut of [`cut_disjoint`]: the mesh before, the mesh after, the loop's index.
+pub type CutTest<'a> = dyn FnMut(&TriMesh, &TriMesh, usize) -> bool + 'a;
+
 /// Cuts, in one pass, the loops of `cycles` (as [`rfta_mesh::ShortLoops::loops`] gives them,
 /// shortest first) for which `wanted(k, cut)` holds (`k` the loop's index, `cut` the number cut
 /// so far) and that share no vertex with one cut before it in the pass, the two sides `gap`
-/// apart ([`rfta_mesh::cut_along`]), each kept only if `keeps(before, after, k)` approves the
-/// mesh it makes. Loops of one basis that share no vertex are disjoint and independent: no
+/// apart ([`rfta_mesh::cut_along`]); with `keeps`, each cut is made on a copy and kept only if
+/// `keeps(before, after, k)` approves the mesh it makes (without, in place). Loops of one basis that share no vertex are disjoint and independent: no
 /// set of them separates the surface, so each cut takes one handle. Returns the indices of the
 /// loops cut, ascending.
 ///
@@ -78,7 +75,7 @@ pub fn to_genus(
 /// // A torus whose tube is 0.63 around: its one short loop cut, genus 1 to 0.
 /// let mut torus = shapes::torus(1.0, 0.1, 64, 16);
 /// let loops = rfta_mesh::short_loops(&torus, 1.0).expect("closed");
-/// let cut = rfta_repair::cut_disjoint(&mut torus, &loops.loops, 0.01, |_, _| true, |_, _, _| true);
+/// let cut = rfta_repair::cut_disjoint(&mut torus, &loops.loops, 0.01, |_, _| true, None);
 /// assert_eq!(cut, [0]);
 /// assert_eq!(rfta_mesh::Topology::of(&torus).genus(), Some(0));
 /// ```
@@ -87,7 +84,7 @@ pub fn cut_disjoint(
     cycles: &[Vec<u32>],
     gap: f64,
     mut wanted: impl FnMut(usize, usize) -> bool,
-    mut keeps: impl FnMut(&TriMesh, &TriMesh, usize) -> bool,
+    mut keeps: Option<&mut CutTest<'_>>,
 ) -> Vec<usize> {
     let mut touched = vec![false; mesh.vertices.len()];
     let mut cut = Vec::new();
@@ -101,9 +98,18 @@ pub fn cut_disjoint(
         {
             continue;
         }
-        let mut after = mesh.clone();
-        if rfta_mesh::cut_along(&mut after, cycle, gap) && keeps(mesh, &after, k) {
-            *mesh = after;
+        let made = match keeps.as_mut() {
+            None => rfta_mesh::cut_along(mesh, cycle, gap),
+            Some(keeps) => {
+                let mut after = mesh.clone();
+                let kept = rfta_mesh::cut_along(&mut after, cycle, gap) && keeps(mesh, &after, k);
+                if kept {
+                    *mesh = after;
+                }
+                kept
+            }
+        };
+        if made {
             for &v in cycle {
                 touched[v as usize] = true;
             }
@@ -138,7 +144,7 @@ pub fn cut_sub_cell_handles(
         let Some(loops) = rfta_mesh::short_loops(mesh, cells * finest_cell) else {
             break;
         };
-        let this_pass = cut_disjoint(mesh, &loops.loops, gap, |_, _| true, |_, _, _| true).len();
+        let this_pass = cut_disjoint(mesh, &loops.loops, gap, |_, _| true, None).len();
         if this_pass == 0 {
             break;
         }

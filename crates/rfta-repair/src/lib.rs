@@ -51,7 +51,7 @@ pub use clear::{clear_spheres, push_out_of_spheres};
 pub use components::{Island, remove_islands};
 pub use dent::dent_wrong_side;
 pub use edit::apply_moves;
-pub use genus::{CUT_GAP, cut_disjoint, cut_sub_cell_handles, to_genus};
+pub use genus::{CUT_GAP, CutTest, cut_disjoint, cut_sub_cell_handles, to_genus};
 pub use rfta_mesh::{face_components, signed_volume};
 pub use tunnel::tunnel_cavities;
 

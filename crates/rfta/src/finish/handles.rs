@@ -116,7 +116,7 @@ pub(crate) fn settle(
         // A cut is kept only if it puts no sample with a side on the wrong side; the index of
         // the mesh before it is rebuilt after each cut kept.
         let mut stale = false;
-        let keeps = |before: &TriMesh, after: &TriMesh, k: usize| {
+        let mut keeps = |before: &TriMesh, after: &TriMesh, k: usize| {
             if stale {
                 match MeshIndex::new(before) {
                     Ok(i) => index = i,
@@ -126,7 +126,8 @@ pub(crate) fn settle(
             stale = keeps_sides(before, &index, after, &cycles[k], samples);
             stale
         };
-        let cut = rfta_repair::cut_disjoint(mesh, &cycles, gap, |k, _| artifact(k), keeps);
+        let cut =
+            rfta_repair::cut_disjoint(mesh, &cycles, gap, |k, _| artifact(k), Some(&mut keeps));
         settled.cut.extend(cut.iter().map(|&k| loops.lengths[k]));
         if cut.is_empty() {
             break;
