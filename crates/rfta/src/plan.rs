@@ -111,15 +111,6 @@ impl<'a> Plan<'a> {
                 "field = level-set reads the samples as a level set on a grid; these are scattered (read them as distances: field = distance or auto)".into(),
             ));
         }
-        let t = std::time::Instant::now();
-        let field = field::measure(&samples, params.field, input.clamp);
-        journal.timed(Step::Field, t);
-        if field.level_set {
-            params.rounds = 0;
-            if let (Field::Auto, Some(reach)) = (params.field, field.reach) {
-                journal.warnings.push(Warning::LevelSet { reach });
-            }
-        }
         let unit = UnitBox::new(&samples, input.clamp, input.radius_scale);
         let band = match params.owner_band {
             Some(k) if unit.on_grid() => k * unit.spacing(),
@@ -134,13 +125,30 @@ impl<'a> Plan<'a> {
         } else {
             0
         };
+        let feasible = params.feasible_params(unit.len(), owner_radius, unit.owner_scale());
+        let raster_radius = RASTER_REACH * owner_radius;
+        let t = std::time::Instant::now();
+        let mut field = field::measure(&samples, params.field, input.clamp);
+        let radii = (owner_radius, raster_radius);
+        field::cover_check(&mut field, params.field, &samples, &unit, radii, &feasible);
+        journal.timed(Step::Field, t);
+        if field.level_set {
+            params.rounds = 0;
+            if params.field == Field::Auto {
+                journal.warnings.extend(match (field.covered, field.reach) {
+                    (Some(covered), _) => Some(Warning::Bound { covered }),
+                    (None, Some(reach)) => Some(Warning::LevelSet { reach }),
+                    (None, None) => None,
+                });
+            }
+        }
         Ok(Self {
             far_spheres,
-            feasible: params.feasible_params(unit.len(), owner_radius, unit.owner_scale()),
+            feasible,
             round_spsr: params.round_spsr_params(spacing),
             final_spsr: params.spsr_params(spacing),
             fine_rounds: params.fine_rounds(spacing),
-            raster_radius: RASTER_REACH * owner_radius,
+            raster_radius,
             owner_radius,
             params,
             samples,

@@ -402,7 +402,8 @@ impl Report {
     }
 
     /// How the values read ([`crate::field`]), in one sentence: how far they reach towards their
-    /// zero set, how many fall short of it, the gradient's norm at it, and whether they were
+    /// zero set, how many fall short of it, the gradient's norm at it, how many spheres others
+    /// cover, and whether they were
     /// read as distances or as a level set; `None` for scattered samples (not measured).
     pub fn field_quality(&self) -> Option<String> {
         let f = &self.field;
@@ -412,8 +413,14 @@ impl Report {
                 "; gradient norm at it {lo:.2}, {mid:.2}, {hi:.2} (10th, 50th, 90th percentile)"
             )
         });
+        let covered = f.covered.map_or_else(String::new, |c| {
+            format!(
+                "; {:.1}% of the spheres near it have no point outside every other sphere",
+                100.0 * c
+            )
+        });
         Some(format!(
-            "the values, read as {}: far from their zero set they reach {:.0}% of the way to it, {:.1}% of them fall short of it by over two spacings{slope}",
+            "the values, read as {}: far from their zero set they reach {:.0}% of the way to it, {:.1}% of them fall short of it by over two spacings{slope}{covered}",
             if f.level_set {
                 "a level set"
             } else {
@@ -568,10 +575,10 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 6 + 4 + 4 + 15 fields, how the values read 4, the simplification's 2
+        // The stages' 4 + 6 + 4 + 4 + 15 fields, how the values read 5, the simplification's 2
         // (its output faces left to the mesh), the mesh check's 7, the consistency check's 6 (its
         // sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 6 + 4 + 4 + 15 + 4 + 2 + 7 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 6 + 4 + 4 + 15 + 5 + 2 + 7 + 6 + 2, "{text}");
     }
 
     #[test]

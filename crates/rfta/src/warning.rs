@@ -24,6 +24,13 @@ pub enum Warning {
         /// [`crate::FieldReport::reach`].
         reach: f64,
     },
+    /// The values reach their zero set but their spheres do not all touch it: `covered` of the
+    /// spheres near it lie inside the union of others, as a bound's (a CSG tree's) do; the mesh
+    /// is the field's zero set ([`crate::Field::LevelSet`]).
+    Bound {
+        /// [`crate::FieldReport::covered`].
+        covered: f64,
+    },
     /// Flat plateaus of the values at magnitude `at` (`samples` on them): a clamp, detected.
     Clamped {
         /// The clamp.
@@ -124,6 +131,11 @@ impl fmt::Display for Warning {
                 f,
                 "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
                 100.0 * reach
+            ),
+            Self::Bound { covered } => write!(
+                f,
+                "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
+                100.0 * covered
             ),
             Self::Clamped { at, samples } => write!(
                 f,
