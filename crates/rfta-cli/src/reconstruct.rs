@@ -181,9 +181,11 @@ pub(crate) struct Tuning {
     #[serde(skip_serializing_if = "Option::is_none")]
     initial: Option<Initial>,
     /// How the samples are read: as distances (the paper's spheres), as a level set whose zero
-    /// set is the surface (grids: trained networks, CSG bounds, any field that is not a
-    /// distance), or, by default, as a level set when a grid's values fall short of their zero
-    /// set (the report's field figures say how far they reach).
+    /// set is the surface (grids: trained networks, any field that is not a distance), as bounds
+    /// on the distance (grids: CSG trees, smooth blends: spheres as empty space, points on the
+    /// zero set), or, by default, as a level set when a grid's values fall short of their zero
+    /// set and as bounds when other spheres cover some of theirs (the report's field figures say
+    /// how far they reach and how many are covered).
     #[arg(long, value_enum)]
     #[serde(skip_serializing_if = "Option::is_none")]
     field: Option<FieldArg>,
@@ -210,12 +212,14 @@ pub(crate) struct Tuning {
 #[derive(Debug, Clone, Copy, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub(crate) enum FieldArg {
-    /// Distances when they behave like them, else a level set.
+    /// Distances when they behave like them, else a level set or bounds.
     Auto,
     /// The paper's spheres.
     Distance,
     /// The field's zero set (grids).
     LevelSet,
+    /// Bounds on the distance: spheres as empty space, points on the zero set (grids).
+    Bound,
 }
 
 /// `--initial`: `rfta::InitialPoints` by its serde names.

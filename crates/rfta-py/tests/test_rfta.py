@@ -436,13 +436,14 @@ def test_a_field_that_is_not_a_distance_is_read_as_a_level_set():
 
     with pytest.warns(rfta.RftaWarning, match="not distances"):
         r = rfta.reconstruct(flat(grid(24)))
-    assert r.report["level_set"] and r.report["reach"] < 0.5, r.report
+    assert r.report["read_as"] == "level-set" and r.report["reach"] < 0.5, r.report
     assert r.report["components"] == 1 and r.report["genus"] == 1
     # Its vertices on the torus within a tenth of a spacing (2 / 24).
     assert np.abs(torus_sdf(r.vertices)).max() < 0.1 * 2.0 / 24.0
-    assert not rfta.reconstruct(torus_sdf(grid(16)), preset="fast").report["level_set"]
+    exact = rfta.reconstruct(torus_sdf(grid(16)), preset="fast").report
+    assert exact["read_as"] == "distances" and exact["spheres_covered"] < 0.005, exact
     forced = rfta.reconstruct(torus_sdf(grid(16)), field="level-set")
-    assert forced.report["level_set"]
+    assert forced.report["read_as"] == "level-set"
     with pytest.raises(ValueError, match="field"):
         rfta.reconstruct(torus_sdf(grid(12)), field="occupancy")
     # As a function to ask: refined where its sign changes, within the budget.
@@ -453,8 +454,24 @@ def test_a_field_that_is_not_a_distance_is_read_as_a_level_set():
         return flat(p)
 
     r = rfta.reconstruct(sdf=counted, bounds=(-1, 1), budget=8000)
-    assert sum(asked) <= 8000 and r.report["level_set"]
+    assert sum(asked) <= 8000 and r.report["read_as"] == "level-set"
     assert r.report["components"] == 1 and r.report["genus"] == 1
+
+
+def test_a_csg_bound_is_read_as_bounds():
+    # A cube intersected with a ball by max: a bound whose spheres near the rounded edges lie
+    # inside others. Read as bounds, one closed piece with no sample on the wrong side.
+    p = grid(24)
+    cube = np.linalg.norm(np.maximum(np.abs(p) - 0.5, 0.0), axis=-1) + np.minimum(
+        (np.abs(p) - 0.5).max(axis=-1), 0.0
+    )
+    S = np.maximum(cube, np.linalg.norm(p, axis=-1) - 0.65)
+    with pytest.warns(rfta.RftaWarning, match="CSG"):
+        r = rfta.reconstruct(S)
+    assert r.report["read_as"] == "bounds" and r.report["spheres_covered"] > 0.005, r.report
+    assert r.report["components"] == 1 and r.report["genus"] == 0
+    assert r.report["sign_errors"] == 0 and r.report["moved_onto_zero_set"] > 0
+    assert rfta.reconstruct(S, field="distance", rounds=1).report["read_as"] == "distances"
 
 
 def test_a_callable_sdf_is_asked_within_the_budget():

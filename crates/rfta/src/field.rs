@@ -20,13 +20,23 @@
 //! own points on which that search fails ([`covered`], a few thousand of them tested): at most
 //! 0.03% on every exact dev grid, 2% to 25% on the CSG fields of `cargo xtask eval inexact`.
 //!
-//! Below `REACH_FLOOR`, or above `COVERED_CEILING`, the samples are read as a level set
-//! ([`Field::LevelSet`]): each sample
+//! Below `REACH_FLOOR` the samples are read as a level set ([`Reading::LevelSet`]): each sample
 //! within a spacing and a half of the zero set is moved to it by Newton's method on the grid's
 //! tricubic interpolant ([`rfta_geom::CubicField`]), its normal the interpolant's gradient there;
 //! the screened Poisson solve of those points is the mesh, with no fine-tuning against the
 //! spheres (they do not touch the surface). The input check, the repair and the verdict are the
 //! same.
+//!
+//! Above `COVERED_CEILING` they are read as bounds ([`Reading::Bounds`]): each sphere is empty
+//! space (a bound's value never exceeds the distance), but not every one touches the surface. The
+//! initial points are the paper's, found against every sphere near the surface (not a random
+//! batch: a point a batch misses can lie inside a sphere it left out, on a part's buried face),
+//! and each one off the zero set of the grid's tricubic interpolant by more than `ON_ZERO_SET`
+//! spacings (a short sphere's, floating in the gap it leaves) is moved onto it by Newton's
+//! method ([`onto_zero_set`]); no fine-tuning rounds (they would pull the surface back to short
+//! spheres). Spheres keep creases the interpolant rounds: on the CSG fields of `cargo xtask eval
+//! inexact` the mean Chamfer is 0.54x marching cubes' at 64^3 where the level-set reading gives
+//! 0.71x (docs/eval/inexact.md).
 
 use rayon::prelude::*;
 use rfta_feasible::TangentPoints;
@@ -41,9 +51,9 @@ use crate::normalize::UnitBox;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Field {
-    /// As distances when they behave like distances, else as a level set: on a grid, a
-    /// [`FieldReport::reach`] below 0.5 or a [`FieldReport::covered`] above 0.5% reads them as a
-    /// level set; scattered samples are read as distances.
+    /// As distances when they behave like distances, else as a level set or as bounds: on a
+    /// grid, a [`FieldReport::reach`] below 0.5 reads them as a level set, a
+    /// [`FieldReport::covered`] above 0.5% as bounds; scattered samples are read as distances.
     #[default]
     Auto,
     /// As distances: the paper's spheres, each touching the surface.
@@ -51,13 +61,43 @@ pub enum Field {
     /// As a level set whose zero set is the surface (grids only): points on it by Newton's
     /// method on the tricubic interpolant, no fine-tuning.
     LevelSet,
+    /// As bounds on the distance (grids only; CSG trees, smooth blends): each sphere empty
+    /// space, its tangency point moved onto the tricubic interpolant's zero set where it lies
+    /// off it, no fine-tuning.
+    Bound,
+}
+
+/// How the samples were read ([`FieldReport::read_as`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reading {
+    /// As distances ([`Field::Distance`]).
+    #[default]
+    Distances,
+    /// As a level set ([`Field::LevelSet`]).
+    LevelSet,
+    /// As bounds on the distance ([`Field::Bound`]).
+    Bounds,
+}
+
+impl Reading {
+    /// Whether fine-tuning rounds run: only for distances (a level set's and a bound's spheres
+    /// need not touch the surface).
+    pub(crate) fn fine_tunes(self) -> bool {
+        self == Self::Distances
+    }
+
+    /// Whether every sphere is empty space the mesh may not enter: not a level set's.
+    pub(crate) fn spheres_bind(self) -> bool {
+        self != Self::LevelSet
+    }
 }
 
 /// What the field's measure found, and how the samples were read.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct FieldReport {
-    /// The samples were read as a level set ([`Field::LevelSet`]), not as distances.
-    pub level_set: bool,
+    /// How the samples were read: as distances, a level set or bounds.
+    pub read_as: Reading,
     /// Median of `|s| / d` over the grid's samples at least 4 spacings from the nearest sample
     /// next to a sign change (`d` the distance to it): about 1 for a distance, lower where the
     /// values fall short of their zero set. `None`: scattered samples, or fewer than 100 such.
@@ -71,11 +111,11 @@ pub struct FieldReport {
     /// sign change: 1 for a distance sampled finely, lower at coarse grids.
     #[serde(rename = "slope_at_zero_set")]
     pub slope: Option<[f64; 3]>,
-    /// The fraction of the spheres that own points (every k-th, a few thousand) that other
+    /// The fraction of the spheres that own points (every k-th, about a thousand) that other
     /// spheres cover: the local search finds no point on them outside every other sphere. About
     /// 0 for a distance; a bound's (a CSG tree's) spheres stop short inside others. `None`:
-    /// scattered samples, values already read as a level set or as distances by request, or
-    /// fewer than 100 such spheres.
+    /// scattered samples, values already read as a level set, a reading asked for, or fewer than
+    /// 100 such spheres.
     #[serde(rename = "spheres_covered")]
     pub covered: Option<f64>,
 }
@@ -90,9 +130,16 @@ const REACH_FLOOR: f64 = 0.5;
 /// [`FieldReport::covered`].
 const MIN_FAR: usize = 100;
 
-/// A [`FieldReport::covered`] above this reads the samples as a level set: 16 times the most an
-/// exact dev grid gives, a quarter of the least a CSG field does.
+/// A [`FieldReport::covered`] above this reads the samples as bounds: 16 times the most an
+/// exact dev grid gives, a third of the least a CSG field does.
 const COVERED_CEILING: f64 = 0.005;
+
+/// The spheres each local-search move resolves in [`cover_check`] and in the initial points of
+/// bounds, whose trees hold every sphere near the surface, not a batch: the reference's
+/// `2 n^(1/3)` of all `n` samples (130 at 64^3) made the bounds' covered spheres, which use
+/// every move, cost six times as long for the same points (csg-drilled at 64^3: 12.6 s against
+/// 2.1 s, Chamfer 0.00172 both).
+pub(crate) const NEAR_K_SEARCH: usize = 22;
 
 /// [`cover_check`] tests at most about this many spheres ...
 const COVER_TESTS: usize = 1000;
@@ -125,6 +172,12 @@ const BAND: f64 = 1.5;
 
 /// A zero-set point this many spacings or more from its sample is dropped (Newton went astray).
 const REACH: f64 = 2.5;
+
+/// Read as bounds, a tangency point where the interpolant's magnitude exceeds this many spacings
+/// is moved onto its zero set: of 0.03, 0.05, 0.1 and 0.3 the mean Chamfer of the CSG fields
+/// at 32^3 and 64^3 was least at 0.05 (0.56x and 0.54x marching cubes'; 0.1: 0.54x and 0.58x;
+/// 0.3: 0.64x and 0.62x).
+const ON_ZERO_SET: f64 = 0.05;
 
 /// How the grid's values behave as distances (the module docs), and whether `field` reads them as
 /// a level set. Samples at or beyond `clamp` (a clamp given or detected: its plateaus fall short
@@ -183,13 +236,14 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
         let p = percentiles(slopes, &[0.1, 0.5, 0.9]);
         [p[0], p[1], p[2]]
     });
-    let level_set = match field {
-        Field::Auto => reach.is_some_and(|r| r < REACH_FLOOR),
-        Field::Distance => false,
-        Field::LevelSet => true,
+    let read_as = match field {
+        Field::Auto if reach.is_some_and(|r| r < REACH_FLOOR) => Reading::LevelSet,
+        Field::Auto | Field::Distance => Reading::Distances,
+        Field::LevelSet => Reading::LevelSet,
+        Field::Bound => Reading::Bounds,
     };
     FieldReport {
-        level_set,
+        read_as,
         reach,
         short: short as f64 / values.len().max(1) as f64,
         slope,
@@ -198,8 +252,7 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
 }
 
 /// With [`Field::Auto`], on a grid whose values were not read as a level set by their reach:
-/// [`FieldReport::covered`] measured, and the samples read as a level set above
-/// `COVERED_CEILING`. Of the spheres that own points (radius below `owner_radius`, every k-th of
+/// [`FieldReport::covered`] measured, and the samples read as bounds above `COVERED_CEILING`. Of the spheres that own points (radius below `owner_radius`, every k-th of
 /// them, about `COVER_TESTS`), each starts on the side its value's gradient points to the zero
 /// set and is moved by the paper's local search (`params`, as the initial points') against every
 /// sphere smaller than `reach_radius`; those that end inside another are covered.
@@ -214,7 +267,7 @@ pub(crate) fn cover_check(
     let Some(grid) = samples.as_grid() else {
         return;
     };
-    if field != Field::Auto || report.level_set {
+    if field != Field::Auto || report.read_as != Reading::Distances {
         return;
     }
     let values = samples.values();
@@ -232,6 +285,10 @@ pub(crate) fn cover_check(
         .filter(|&i| spheres[i as usize].radius < reach_radius)
         .collect();
     let tree = SphereTree::with_indices(spheres, &near);
+    let params = &rfta_feasible::Params {
+        k_search: params.k_search.min(NEAR_K_SEARCH),
+        ..params.clone()
+    };
     let planned: Vec<u32> = owners
         .iter()
         .step_by(owners.len().div_ceil(COVER_TESTS))
@@ -270,7 +327,9 @@ pub(crate) fn cover_check(
     }
     let covered = stuck as f64 / tested as f64;
     report.covered = Some(covered);
-    report.level_set = covered > COVERED_CEILING;
+    if covered > COVERED_CEILING {
+        report.read_as = Reading::Bounds;
+    }
 }
 
 /// Whether the paper's local search finds a point on sphere `i` outside every sphere of `tree`:
@@ -288,6 +347,46 @@ fn uncovered_point(
         .any(|d| {
             rfta_feasible::local_search(spheres, tree, i, s.center + s.radius * d, params).is_some()
         })
+}
+
+/// Tangency points (in the unit box of `unit`) on the zero set of the grid's tricubic
+/// interpolant: each where the interpolant's magnitude is below `ON_ZERO_SET` spacings, the
+/// others moved onto it by Newton's method (the unit gradient there their normal) or, where it
+/// does not converge within `REACH` spacings, dropped. Also returns how many were moved.
+pub(crate) fn onto_zero_set(
+    cloud: TangentPoints,
+    samples: &SdfSamples,
+    unit: &UnitBox,
+) -> (TangentPoints, usize) {
+    let Some(grid) = samples.as_grid() else {
+        return (cloud, 0);
+    };
+    let Some(field) = CubicField::new(grid, samples.values()) else {
+        return (cloud, 0);
+    };
+    let h = grid.spacing().min_element();
+    let moved: Vec<Option<(DVec3, DVec3, bool)>> = (0..cloud.len())
+        .into_par_iter()
+        .map(|k| {
+            let p = unit.to_input(cloud.points[k]);
+            if field.value_gradient(p).0.abs() <= ON_ZERO_SET * h {
+                return Some((cloud.points[k], cloud.normals[k], false));
+            }
+            let (q, normal) = field.zero_near(p, REACH * h)?;
+            Some((unit.to_unit(q), normal, true))
+        })
+        .collect();
+    let mut out = TangentPoints::default();
+    let mut count = 0;
+    for (k, m) in moved.into_iter().enumerate() {
+        if let Some((p, n, was_moved)) = m {
+            out.points.push(p);
+            out.normals.push(n);
+            out.owners.push(cloud.owners[k]);
+            count += usize::from(was_moved);
+        }
+    }
+    (out, count)
 }
 
 /// One point per sample within `BAND` spacings of the zero set (by value, or next to a sign
@@ -382,7 +481,7 @@ mod tests {
         assert_eq!(r.short, 0.0);
         let [lo, mid, hi] = r.slope.expect("test");
         assert!(lo > 0.95 && mid > 0.98 && hi < 1.01, "{:?}", r.slope);
-        assert!(!r.level_set);
+        assert_eq!(r.read_as, Reading::Distances);
     }
 
     /// A distance clamped at 0.1, softly (a trained network's far field): the spheres stop short
@@ -396,13 +495,13 @@ mod tests {
         );
         assert!(r.reach.expect("test") < 0.3, "{:?}", r.reach);
         assert!(r.short > 0.5, "{}", r.short);
-        assert!(r.level_set);
+        assert_eq!(r.read_as, Reading::LevelSet);
         let forced = measure(
             &sphere_grid(32, |d| 0.1 * (d / 0.1).tanh()),
             Field::Distance,
             None,
         );
-        assert!(!forced.level_set);
+        assert_eq!(forced.read_as, Reading::Distances);
     }
 
     /// A distance clamped exactly at 0.1 (a narrow band), the clamp not given: its plateau is
@@ -410,7 +509,7 @@ mod tests {
     #[test]
     fn a_hard_clamps_plateau_is_no_shortfall() {
         let r = measure(&sphere_grid(32, |d| d.clamp(-0.1, 0.1)), Field::Auto, None);
-        assert!(!r.level_set, "{r:?}");
+        assert_eq!(r.read_as, Reading::Distances, "{r:?}");
         assert!(r.reach.is_none_or(|x| x > 0.9), "{r:?}");
     }
 
@@ -424,6 +523,31 @@ mod tests {
             None,
         );
         assert_eq!(r, FieldReport::default());
+    }
+
+    /// A point on the zero set stays as it is; one a third of a spacing off it (a short sphere's)
+    /// moves onto it with the radial normal; one three spacings off (beyond Newton's reach) is
+    /// dropped.
+    #[test]
+    fn points_off_the_zero_set_move_onto_it() {
+        let samples = sphere_grid(24, |d| d);
+        let unit = UnitBox::new(&samples, None, None);
+        let h = 2.0 / 24.0;
+        let dir = DVec3::new(1.0, 2.0, 2.0) / 3.0;
+        let on = dir * 0.5;
+        let cloud = TangentPoints {
+            points: [on, dir * (0.5 + h / 3.0), dir * (0.5 + 3.0 * h)]
+                .map(|p| unit.to_unit(p))
+                .to_vec(),
+            normals: vec![dir; 3],
+            owners: vec![0, 1, 2],
+        };
+        let (out, moved) = onto_zero_set(cloud.clone(), &samples, &unit);
+        assert_eq!((out.owners.as_slice(), moved), ([0, 1].as_slice(), 1));
+        assert_eq!(out.points[0], cloud.points[0]);
+        let q = unit.to_input(out.points[1]);
+        assert!((q.length() - 0.5).abs() < 0.01 * h, "{q}");
+        assert!(out.normals[1].dot(dir) > 0.999);
     }
 
     /// Half the slope of a distance (a field that under-states by 2): the zero-set points lie on

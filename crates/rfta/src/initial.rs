@@ -13,7 +13,7 @@ use crate::normalize::UnitBox;
 use crate::params::Seeds;
 use crate::plan::Plan;
 use crate::report::{InitialReport, Journal, counted};
-use crate::{Error, Result, Stage};
+use crate::{Error, Reading, Result, Stage};
 
 /// With [`crate::InitialPoints::Gradient`], a sign set is rasterized all the same when none or
 /// fewer than one in this many of its drawn spheres gives an empty-space point.
@@ -29,12 +29,22 @@ pub(crate) fn initial_points(
     journal: &mut Journal,
     progress: &mut (dyn FnMut(Stage) + Send),
 ) -> Result<(TangentPoints, InitialReport)> {
-    if plan.field.level_set {
-        return Ok(on_zero_set(plan, seeds, progress));
+    match plan.field.read_as {
+        Reading::LevelSet => Ok(on_zero_set(plan, seeds, progress)),
+        Reading::Distances => {
+            let seeds = seeds.map(|s| feasible_seeds(plan, &plan.scaled(s)));
+            // Only spheres near the surface shape the empty space an owner starts from
+            // (RASTER_REACH).
+            drawing(plan, seeds, plan.raster_radius, journal, progress)
+        }
+        Reading::Bounds => {
+            let (cloud, mut report) = drawing(plan, None, plan.raster_radius, journal, progress)?;
+            let (cloud, moved) = crate::field::onto_zero_set(cloud, &plan.samples, &plan.unit);
+            report.moved_onto_zero_set = moved;
+            report.feasible_initial = cloud.len();
+            Ok((cloud, report))
+        }
     }
-    let seeds = seeds.map(|s| feasible_seeds(plan, &plan.scaled(s)));
-    // Only spheres near the surface shape the empty space an owner starts from (RASTER_REACH).
-    drawing(plan, seeds, plan.raster_radius, journal, progress)
 }
 
 /// The initial points of samples read as a level set: on its zero set ([`crate::field`]), or
@@ -147,11 +157,16 @@ fn drawing(
         let empty_points = empty_space(plan, set, &draw, reach, negative, &mut report)?;
         raster_time += t_raster.elapsed();
         report.empty_space_points += empty_points.len();
-        let batch = draw_batch(
-            set,
-            params.batch_size,
-            Seeds(params.seed).initial_batch(negative),
-        );
+        // Bounds are tested against every sphere drawn, not a batch: a bound's point a batch
+        // passes can lie on a part's face buried in spheres the batch left out.
+        let batch = match plan.field.read_as {
+            Reading::Bounds => draw.iter().map(|&i| i as u32).collect(),
+            _ => draw_batch(
+                set,
+                params.batch_size,
+                Seeds(params.seed).initial_batch(negative),
+            ),
+        };
         let tree = SphereTree::with_indices(&unit.spheres, &batch);
         crate::pool::waiters_back();
         parts.push(counted(unseeded.len(), progress, |done| {

@@ -9,7 +9,7 @@ use rfta_feasible::TangentPoints;
 use rfta_geom::SdfSamples;
 use rfta_spsr::SpsrParams;
 
-use crate::field::{self, Field, FieldReport};
+use crate::field::{self, Field, FieldReport, Reading};
 use crate::normalize::{self, UnitBox};
 use crate::report::{InputReport, Journal};
 use crate::{Error, Params, RASTER_REACH, Reconstruction, Result, Step, Warning, check};
@@ -45,8 +45,8 @@ pub(crate) struct Plan<'a> {
     factor: Option<f64>,
     /// The input check's findings (the clamp used, the noise shrink of the radii).
     pub(crate) input: InputReport,
-    /// How the samples are read: as distances, or as a level set ([`crate::field`]), whose
-    /// initial points lie on the zero set and need no rounds ([`Params::rounds`] is 0).
+    /// How the samples are read: as distances, as a level set or as bounds ([`crate::field`]);
+    /// the last two run no rounds ([`Params::rounds`] is 0).
     pub(crate) field: FieldReport,
     /// The samples as spheres in the unit box.
     pub(crate) unit: UnitBox,
@@ -106,9 +106,9 @@ impl<'a> Plan<'a> {
                 ..InputReport::default()
             }
         };
-        if params.field == Field::LevelSet && samples.as_grid().is_none() {
+        if matches!(params.field, Field::LevelSet | Field::Bound) && samples.as_grid().is_none() {
             return Err(Error::InvalidParams(
-                "field = level-set reads the samples as a level set on a grid; these are scattered (read them as distances: field = distance or auto)".into(),
+                "field = level-set and field = bound read the samples on a grid (its smooth interpolant's zero set); these are scattered (read them as distances: field = distance or auto)".into(),
             ));
         }
         let unit = UnitBox::new(&samples, input.clamp, input.radius_scale);
@@ -125,22 +125,27 @@ impl<'a> Plan<'a> {
         } else {
             0
         };
-        let feasible = params.feasible_params(unit.len(), owner_radius, unit.owner_scale());
+        let mut feasible = params.feasible_params(unit.len(), owner_radius, unit.owner_scale());
         let raster_radius = RASTER_REACH * owner_radius;
         let t = std::time::Instant::now();
         let mut field = field::measure(&samples, params.field, input.clamp);
         let radii = (owner_radius, raster_radius);
         field::cover_check(&mut field, params.field, &samples, &unit, radii, &feasible);
         journal.timed(Step::Field, t);
-        if field.level_set {
+        if !field.read_as.fine_tunes() {
             params.rounds = 0;
-            if params.field == Field::Auto {
-                journal.warnings.extend(match (field.covered, field.reach) {
-                    (Some(covered), _) => Some(Warning::Bound { covered }),
-                    (None, Some(reach)) => Some(Warning::LevelSet { reach }),
-                    (None, None) => None,
+        }
+        if field.read_as == Reading::Bounds {
+            feasible.k_search = feasible.k_search.min(field::NEAR_K_SEARCH);
+        }
+        if params.field == Field::Auto {
+            journal
+                .warnings
+                .extend(match (field.read_as, field.covered, field.reach) {
+                    (Reading::Bounds, Some(covered), _) => Some(Warning::Bound { covered }),
+                    (Reading::LevelSet, _, Some(reach)) => Some(Warning::LevelSet { reach }),
+                    _ => None,
                 });
-            }
         }
         Ok(Self {
             far_spheres,

@@ -205,6 +205,9 @@ pub struct InitialReport {
     /// Of the initial points, those kept from an earlier pass (an adaptive run's pass before;
     /// 0 otherwise).
     pub seeded: usize,
+    /// Read as bounds, the initial points that lay off the field's zero set and were moved onto
+    /// it ([`crate::field::onto_zero_set`]; 0 otherwise).
+    pub moved_onto_zero_set: usize,
 }
 
 /// What the screened Poisson solves and fine-tuning rounds did (steps 4 and 5).
@@ -421,10 +424,10 @@ impl Report {
         });
         Some(format!(
             "the values, read as {}: far from their zero set they reach {:.0}% of the way to it, {:.1}% of them fall short of it by over two spacings{slope}{covered}",
-            if f.level_set {
-                "a level set"
-            } else {
-                "distances"
+            match f.read_as {
+                crate::Reading::Distances => "distances",
+                crate::Reading::LevelSet => "a level set",
+                crate::Reading::Bounds => "bounds on the distance",
             },
             100.0 * reach,
             100.0 * f.short,
@@ -575,10 +578,10 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 6 + 4 + 4 + 15 fields, how the values read 5, the simplification's 2
+        // The stages' 4 + 7 + 4 + 4 + 15 fields, how the values read 5, the simplification's 2
         // (its output faces left to the mesh), the mesh check's 7, the consistency check's 6 (its
         // sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 6 + 4 + 4 + 15 + 5 + 2 + 7 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 7 + 4 + 4 + 15 + 5 + 2 + 7 + 6 + 2, "{text}");
     }
 
     #[test]

@@ -318,12 +318,15 @@ def reconstruct(
         option (the CLI keeps the preset's), and ``threads`` (the global ``rfta --threads``).
         ``initial``: ``"gradient"`` (on grids, the default: the initial points from the samples'
         gradients) or ``"raster"`` (the paper's rasterized empty space).
-    field : "auto", "distance" or "level-set"
+    field : "auto", "distance", "level-set" or "bound"
         How the samples are read: as distances (the paper's spheres), as a level set whose zero
-        set is the surface (grids only: a trained network's values, a CSG bound, any field that
-        is not a distance), or, by default, as a level set when a grid's values fall short of
-        their zero set. ``report["reach"]`` says how far they reach, ``report["level_set"]``
-        how they were read.
+        set is the surface (grids only: a trained network's values, any field that is not a
+        distance), as bounds on the distance (grids only: CSG trees of min and max, smooth
+        blends: the spheres as empty space, the points on the zero set), or, by default, as a
+        level set when a grid's values fall short of their zero set and as bounds when other
+        spheres cover some of theirs. ``report["reach"]`` and ``report["spheres_covered"]`` say
+        how far they reach and how many are covered, ``report["read_as"]`` (``"distances"``,
+        ``"level-set"`` or ``"bounds"``) how they were read.
         With ``sdf``, the base grid decides: a level set is refined where its sign changes
         (as MISE does) and its finest grid read as one.
     simplify, simplify_tolerance, faces

@@ -28,13 +28,19 @@ pub(super) fn base_if_level_set(
     lattice: &super::lattice::Lattice,
     params: &Params,
 ) -> Result<Option<(SdfSamples, FieldReport)>> {
-    if params.field == Field::Distance {
-        return Ok(None);
+    match params.field {
+        Field::Distance => return Ok(None),
+        Field::Bound => {
+            return Err(crate::Error::InvalidParams(
+                "field = bound reads a grid's samples; a function is asked adaptively as distances or as a level set (field = distance, level-set or auto)".into(),
+            ));
+        }
+        Field::Auto | Field::LevelSet => {}
     }
     let (grid, values) = lattice.base_grid()?;
     let base = SdfSamples::grid(grid, values)?;
     let field = crate::field::measure(&base, params.field, params.clamp);
-    Ok(field.level_set.then_some((base, field)))
+    Ok((field.read_as == crate::Reading::LevelSet).then_some((base, field)))
 }
 
 /// Refines `base` (the base grid, every value asked) by sign within `budget` evaluations in all,

@@ -321,7 +321,7 @@ fn repair_once(
     report.dents = dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
     let before = mesh.vertices.clone();
     // A level set's values are not distances: its spheres guarantee no empty space.
-    if !plan.field.level_set {
+    if plan.field.read_as.spheres_bind() {
         let spheres = unit.sphere_set();
         push_out_of_spheres(&mut mesh, &spheres, &near, PUSH_DEPTH * unit.spacing());
         report.vertices_added = clear_spheres(
@@ -405,9 +405,9 @@ fn measure(
         }
     }
     // A level set's values are not distances: a sphere the surface enters is no disagreement,
-    // nor is a sphere without a point.
-    let level_set = plan.field.level_set;
-    let disagrees = if level_set {
+    // nor is a sphere without a point (nor for bounds, whose spheres others may cover).
+    let reading = plan.field.read_as;
+    let disagrees = if !reading.spheres_bind() {
         c.sign_errors > 0
     } else {
         !c.is_consistent()
@@ -435,7 +435,7 @@ fn measure(
     // A few spheres covered by their neighbours are normal (the reference has them too); a
     // twentieth of them means clamped, zero or inconsistent values and a less certain surface.
     let eligible = n - report.final_solve.far_spheres;
-    if report.final_solve.spheres_without_point * 20 > eligible && !level_set {
+    if report.final_solve.spheres_without_point * 20 > eligible && reading.fine_tunes() {
         journal.warnings.push(Warning::SpheresWithoutPoint {
             without: report.final_solve.spheres_without_point,
             eligible,

@@ -144,7 +144,7 @@ impl SampleJudge {
             cell: h,
             spheres,
             sided,
-            spheres_bind: !plan.field.level_set,
+            spheres_bind: plan.field.read_as.spheres_bind(),
             slack,
         }
     }
