@@ -550,4 +550,18 @@ mod tests {
             Some(Params::fast().rounds)
         );
     }
+
+    /// `--field`'s values are the library's readings by their serde names, every one of them.
+    #[test]
+    fn the_field_values_are_the_librarys() {
+        let fields: Vec<rfta::Field> = <FieldArg as clap::ValueEnum>::value_variants()
+            .iter()
+            .map(|f| {
+                let name = serde_json::to_value(f).expect("a name");
+                serde_json::from_value(name).expect("a library reading")
+            })
+            .collect();
+        use rfta::Field::{Auto, Bound, Distance, LevelSet};
+        assert_eq!(fields, [Auto, Distance, LevelSet, Bound]);
+    }
 }

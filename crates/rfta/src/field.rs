@@ -17,8 +17,8 @@
 //! no other sphere reaches, so the paper's local search finds a point on it that no other sphere
 //! covers; a bound's sphere may stop short inside the union of others (a part's face buried in
 //! another part), and none is found. [`FieldReport::covered`] is the fraction of the spheres that
-//! own points on which that search fails ([`covered`], a few thousand of them tested): at most
-//! 0.03% on every exact dev grid, 2% to 25% on the CSG fields of `cargo xtask eval inexact`.
+//! own points on which that search fails (`cover_check`, about a thousand of them tested): at
+//! most 0.1% on every exact dev grid, 1.6% to 21% on the CSG fields of `cargo xtask eval inexact`.
 //!
 //! Below `REACH_FLOOR` the samples are read as a level set ([`Reading::LevelSet`]): each sample
 //! within a spacing and a half of the zero set is moved to it by Newton's method on the grid's
@@ -33,7 +33,7 @@
 //! batch: a point a batch misses can lie inside a sphere it left out, on a part's buried face),
 //! and each one off the zero set of the grid's tricubic interpolant by more than `ON_ZERO_SET`
 //! spacings (a short sphere's, floating in the gap it leaves) is moved onto it by Newton's
-//! method ([`onto_zero_set`]); no fine-tuning rounds (they would pull the surface back to short
+//! method (`onto_zero_set`); no fine-tuning rounds (they would pull the surface back to short
 //! spheres). Spheres keep creases the interpolant rounds: on the CSG fields of `cargo xtask eval
 //! inexact` the mean Chamfer is 0.54x marching cubes' at 64^3 where the level-set reading gives
 //! 0.71x (docs/eval/inexact.md).
@@ -130,8 +130,9 @@ const REACH_FLOOR: f64 = 0.5;
 /// [`FieldReport::covered`].
 const MIN_FAR: usize = 100;
 
-/// A [`FieldReport::covered`] above this reads the samples as bounds: 16 times the most an
-/// exact dev grid gives, a third of the least a CSG field does.
+/// A [`FieldReport::covered`] above this reads the samples as bounds: 5 times the most an exact
+/// dev grid gives (0.1%, thingi54725 at 21^3; every other 0 at N = 10 to 128), a third of the
+/// least a CSG field does (1.6%, the blend at 65^3).
 const COVERED_CEILING: f64 = 0.005;
 
 /// The spheres each local-search move resolves in [`cover_check`] and in the initial points of

@@ -206,7 +206,7 @@ pub struct InitialReport {
     /// 0 otherwise).
     pub seeded: usize,
     /// Read as bounds, the initial points that lay off the field's zero set and were moved onto
-    /// it ([`crate::field::onto_zero_set`]; 0 otherwise).
+    /// it (the field module's `onto_zero_set`; 0 otherwise).
     pub moved_onto_zero_set: usize,
 }
 
