@@ -18,7 +18,7 @@
 //! covers; a bound's sphere may stop short inside the union of others (a part's face buried in
 //! another part), and none is found. [`FieldReport::covered`] is the fraction of the spheres that
 //! own points on which that search fails (`cover_check`, about a thousand of them tested): at
-//! most 0.1% on every exact dev grid, 1.6% to 21% on the CSG fields of `cargo xtask eval inexact`.
+//! most 0.1% on every exact dev grid, 1.6% to 25% on the CSG fields of `cargo xtask eval inexact`.
 //!
 //! Below `REACH_FLOOR` the samples are read as a level set ([`Reading::LevelSet`]): each sample
 //! within a spacing and a half of the zero set is moved to it by Newton's method on the grid's

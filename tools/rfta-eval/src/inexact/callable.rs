@@ -67,6 +67,7 @@ pub(super) fn compare(
     )
     .with_context(|| format!("{}: rfta's adaptive mode", field.name))?;
     let mesh = &r.reconstruction.mesh;
+    rfta_io::write_mesh(&out.join(format!("{}-rfta.obj", field.name)), mesh)?;
     rows.push(CallableRow {
         field: field.name.clone(),
         method: "rfta",

@@ -14,9 +14,9 @@
 //! a function ([`callable`]): rfta's adaptive mode against MISE (`--mise VENV` or
 //! `$RFTA_MISE_VENV`) at MISE's evaluations.
 //!
-//! Output: `<out>/results.csv`, `<out>/report.md`, `<out>/inexact-chamfer.svg` and each field's
-//! reference mesh
-//! (`<out>/FIELD-reference.ply`). The run fails when a goal is missed
+//! Output: `<out>/results.csv`, `<out>/report.md`, `<out>/inexact-chamfer.svg`, each field's
+//! reference mesh (`<out>/FIELD-reference.ply`) and each network's meshes as a function
+//! (`<out>/FIELD-mise.obj`, `<out>/FIELD-rfta.obj`). The run fails when a goal is missed
 //! ([`goals`]): on any field, a reading above marching cubes' Chamfer or with a sample on the
 //! wrong side, the default or another reading in more pieces; as a function, rfta above MISE's Chamfer or in more pieces.
 
