@@ -459,17 +459,20 @@ def test_a_field_that_is_not_a_distance_is_read_as_a_level_set():
 
 
 def test_a_csg_bound_is_read_as_bounds():
-    # A cube intersected with a ball by max: a bound whose spheres near the rounded edges lie
-    # inside others. Read as bounds, one closed piece with no sample on the wrong side.
+    # A cube intersected with a ball and drilled by three cylinders, by min and max: a bound whose
+    # spheres near the drills lie inside others. Read as bounds, one closed piece of genus 5 with
+    # no sample on the wrong side.
     p = grid(24)
-    cube = np.linalg.norm(np.maximum(np.abs(p) - 0.5, 0.0), axis=-1) + np.minimum(
-        (np.abs(p) - 0.5).max(axis=-1), 0.0
+    cube = np.linalg.norm(np.maximum(np.abs(p) - 0.45, 0.0), axis=-1) + np.minimum(
+        (np.abs(p) - 0.45).max(axis=-1), 0.0
     )
-    S = np.maximum(cube, np.linalg.norm(p, axis=-1) - 0.65)
+    body = np.maximum(cube, np.linalg.norm(p, axis=-1) - 0.6)
+    drills = [np.linalg.norm(np.delete(p, a, axis=-1), axis=-1) - 0.2 for a in range(3)]
+    S = np.maximum(body, -np.minimum(np.minimum(drills[0], drills[1]), drills[2]))
     with pytest.warns(rfta.RftaWarning, match="CSG"):
         r = rfta.reconstruct(S)
     assert r.report["read_as"] == "bounds" and r.report["spheres_covered"] > 0.005, r.report
-    assert r.report["components"] == 1 and r.report["genus"] == 0
+    assert r.report["components"] == 1 and r.report["genus"] == 5
     assert r.report["sign_errors"] == 0 and r.report["moved_onto_zero_set"] > 0
     assert rfta.reconstruct(S, field="distance", rounds=1).report["read_as"] == "distances"
 

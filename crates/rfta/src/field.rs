@@ -18,7 +18,10 @@
 //! covers; a bound's sphere may stop short inside the union of others (a part's face buried in
 //! another part), and none is found. [`FieldReport::covered`] is the fraction of the spheres that
 //! own points on which that search fails (`cover_check`, about a thousand of them tested): at
-//! most 0.1% on every exact dev grid, 1.6% to 25% on the CSG fields of `cargo xtask eval inexact`.
+//! most 0.1% on every exact dev grid and on OpenVDB's mesh-to-volume level sets of the dev shapes,
+//! 1.6% to 5.5% on three of the four CSG fields of `cargo xtask eval inexact` (the fourth, a cube
+//! intersected with a ball, has its cut-away faces less than `COVER_DEPTH` deep and reads as
+//! distances, which suit it).
 //!
 //! Below `REACH_FLOOR` the samples are read as a level set ([`Reading::LevelSet`]): each sample
 //! within a spacing and a half of the zero set is moved to it by Newton's method on the grid's
@@ -112,8 +115,8 @@ pub struct FieldReport {
     #[serde(rename = "slope_at_zero_set")]
     pub slope: Option<[f64; 3]>,
     /// The fraction of the spheres that own points (every k-th, about a thousand) that other
-    /// spheres cover: the local search finds no point on them outside every other sphere. About
-    /// 0 for a distance; a bound's (a CSG tree's) spheres stop short inside others. `None`:
+    /// spheres cover: the local search finds no point on them outside every other sphere (by a
+    /// quarter spacing, `COVER_DEPTH`). About 0 for a distance; a bound's (a CSG tree's) spheres stop short inside others. `None`:
     /// scattered samples, values already read as a level set, a reading asked for, or fewer than
     /// 100 such spheres.
     #[serde(rename = "spheres_covered")]
@@ -131,8 +134,8 @@ const REACH_FLOOR: f64 = 0.5;
 const MIN_FAR: usize = 100;
 
 /// A [`FieldReport::covered`] above this reads the samples as bounds: 5 times the most an exact
-/// dev grid gives (0.1%, thingi54725 at 21^3; every other 0 at N = 10 to 128), a third of the
-/// least a CSG field does (1.6%, the blend at 65^3).
+/// dev grid or OpenVDB level set gives (0.1%), a third of the least a CSG field does (1.6%,
+/// csg-drilled at 65^3 and 129^3).
 const COVERED_CEILING: f64 = 0.005;
 
 /// The spheres each local-search move resolves in [`cover_check`] and in the initial points of
@@ -141,6 +144,12 @@ const COVERED_CEILING: f64 = 0.005;
 /// every move, cost six times as long for the same points (csg-drilled at 64^3: 12.6 s against
 /// 2.1 s, Chamfer 0.00172 both).
 pub(crate) const NEAR_K_SEARCH: usize = 22;
+
+/// [`cover_check`] counts a sphere covered only where other spheres hold every point it tries by
+/// more than this many spacings: distances that are close but not exact (OpenVDB's
+/// mesh-to-volume level sets of the dev shapes: up to 0.8% covered without it, 0.1% with it)
+/// overlap by less, a CSG tree's buried faces lie deeper (1.6% to 5.5% with it).
+const COVER_DEPTH: f64 = 0.25;
 
 /// [`cover_check`] tests at most about this many spheres ...
 const COVER_TESTS: usize = 1000;
@@ -288,6 +297,7 @@ pub(crate) fn cover_check(
     let tree = SphereTree::with_indices(spheres, &near);
     let params = &rfta_feasible::Params {
         k_search: params.k_search.min(NEAR_K_SEARCH),
+        tol: params.tol.max(COVER_DEPTH * unit.spacing()),
         ..params.clone()
     };
     let planned: Vec<u32> = owners

@@ -134,19 +134,26 @@ fn exact_distances_are_read_as_distances_and_the_reading_can_be_forced() {
     assert!(out.report.field.reach.expect("a reach") < 0.5);
 }
 
-/// A cube intersected with a ball by `max` (a CSG bound: its values reach the zero set, but
-/// near the rounded edges a sample's value is its distance to a face or to the ball that the
-/// other cuts away, and its sphere lies inside others): read as bounds, one closed piece closer to
-/// the zero set than marching cubes; asked for distances, the spheres, nothing measured.
+/// The classic CSG tree, a cube intersected with a ball and drilled through by three cylinders,
+/// all by `min` and `max` (a bound: its values reach the zero set, but a sample's value can be its
+/// distance to a face a drill cut away, its sphere buried in others): read as bounds, one closed
+/// piece of genus 5 closer to the zero set than marching cubes; asked for distances, the
+/// spheres, nothing measured.
 #[test]
 fn a_csg_bound_is_read_as_bounds() {
-    let rounded = |p: DVec3| {
-        let q = p.abs() - DVec3::splat(0.5);
+    let drilled = |p: DVec3| {
+        let q = p.abs() - DVec3::splat(0.45);
         let cube = q.max(DVec3::ZERO).length() + q.max_element().min(0.0);
-        cube.max(p.length() - 0.65)
+        let body = cube.max(p.length() - 0.6);
+        let drill = |a: usize| {
+            let mut r = p;
+            r[a] = 0.0;
+            r.length() - 0.2
+        };
+        body.max(-drill(0).min(drill(1)).min(drill(2)))
     };
     let grid = Grid::cube(32, -1.0, 1.0).expect("grid");
-    let values: Vec<f64> = (0..grid.len()).map(|i| rounded(grid.position(i))).collect();
+    let values: Vec<f64> = (0..grid.len()).map(|i| drilled(grid.position(i))).collect();
     let samples = SdfSamples::grid(grid, values.clone()).expect("samples");
     let out = reconstruct(&samples, &Params::default()).expect("reconstruct");
     let r = &out.report;
@@ -174,18 +181,18 @@ fn a_csg_bound_is_read_as_bounds() {
         "{:?}",
         r.initial
     );
-    assert_eq!((r.mesh.components, r.mesh.genus), (1, Some(0)));
+    assert_eq!((r.mesh.components, r.mesh.genus), (1, Some(5)));
     // Bounds are empty space: no sample on the wrong side, no sphere entered.
     assert!(r.consistency.is_consistent(), "{:?}", r.consistency);
-    // Closer to the zero set than marching cubes (0.38x in docs/eval/inexact.md), scored against
-    // marching cubes of the field at 4 times the resolution (a tenth of the error at 32).
+    // Closer to the zero set than marching cubes (0.50x in docs/eval/inexact.md), scored against
+    // marching cubes of the field at 4 times the resolution (a sixth of the error at 32).
     let fine = Grid::cube(128, -1.0, 1.0).expect("grid");
-    let fine_values: Vec<f64> = (0..fine.len()).map(|i| rounded(fine.position(i))).collect();
+    let fine_values: Vec<f64> = (0..fine.len()).map(|i| drilled(fine.position(i))).collect();
     let reference = rfta_mc::marching_cubes(&fine, &fine_values, 0.0);
     let chamfer = |m: &TriMesh| rfta_metrics::chamfer(m, &reference, 100_000, 7).expect("chamfer");
     let mc = rfta_mc::marching_cubes(&grid, &values, 0.0);
     let (ours, theirs) = (chamfer(&out.mesh), chamfer(&mc));
-    assert!(ours < 0.6 * theirs, "{ours} against {theirs}");
+    assert!(ours < 0.7 * theirs, "{ours} against {theirs}");
     let distance = Params {
         field: Field::Distance,
         rounds: 1,
