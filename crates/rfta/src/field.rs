@@ -116,9 +116,9 @@ pub struct FieldReport {
     pub slope: Option<[f64; 3]>,
     /// The fraction of the spheres that own points (every k-th, about a thousand) that other
     /// spheres cover: the local search finds no point on them outside every other sphere (by a
-    /// quarter spacing, `COVER_DEPTH`). About 0 for a distance; a bound's (a CSG tree's) spheres stop short inside others. `None`:
-    /// scattered samples, values already read as a level set, a reading asked for, or fewer than
-    /// 100 such spheres.
+    /// quarter spacing, `COVER_DEPTH`). About 0 for a distance; a bound's (a CSG tree's)
+    /// spheres stop short inside others. `None`: scattered samples, values already read as a
+    /// level set, a reading asked for, or fewer than 100 such spheres.
     #[serde(rename = "spheres_covered")]
     pub covered: Option<f64>,
 }
@@ -262,8 +262,9 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
 }
 
 /// With [`Field::Auto`], on a grid whose values were not read as a level set by their reach:
-/// [`FieldReport::covered`] measured, and the samples read as bounds above `COVERED_CEILING`. Of the spheres that own points (radius below `owner_radius`, every k-th of
-/// them, about `COVER_TESTS`), each starts on the side its value's gradient points to the zero
+/// [`FieldReport::covered`] measured, and the samples read as bounds above `COVERED_CEILING`.
+/// Of the spheres that own points (radius below `owner_radius`, every k-th of them, about
+/// `COVER_TESTS`), each starts on the side its value's gradient points to the zero
 /// set and is moved by the paper's local search (`params`, as the initial points') against every
 /// sphere smaller than `reach_radius`; those that end inside another are covered.
 pub(crate) fn cover_check(
