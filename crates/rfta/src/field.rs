@@ -83,6 +83,17 @@ pub enum Reading {
     Bounds,
 }
 
+/// As the report's sentences name it.
+impl std::fmt::Display for Reading {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Distances => "distances",
+            Self::LevelSet => "a level set",
+            Self::Bounds => "bounds on the distance",
+        })
+    }
+}
+
 impl Reading {
     /// Whether fine-tuning rounds run: only for distances (a level set's and a bound's spheres
     /// need not touch the surface).

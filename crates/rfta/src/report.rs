@@ -406,8 +406,8 @@ impl Report {
 
     /// How the values read ([`crate::field`]), in one sentence: how far they reach towards their
     /// zero set, how many fall short of it, the gradient's norm at it, how many spheres others
-    /// cover, and whether they were
-    /// read as distances or as a level set; `None` for scattered samples (not measured).
+    /// cover, and whether they were read as distances, a level set or bounds; `None` for
+    /// scattered samples (not measured).
     pub fn field_quality(&self) -> Option<String> {
         let f = &self.field;
         let reach = f.reach?;
@@ -424,11 +424,7 @@ impl Report {
         });
         Some(format!(
             "the values, read as {}: far from their zero set they reach {:.0}% of the way to it, {:.1}% of them fall short of it by over two spacings{slope}{covered}",
-            match f.read_as {
-                crate::Reading::Distances => "distances",
-                crate::Reading::LevelSet => "a level set",
-                crate::Reading::Bounds => "bounds on the distance",
-            },
+            f.read_as,
             100.0 * reach,
             100.0 * f.short,
         ))

@@ -25,8 +25,8 @@ pub enum Warning {
         reach: f64,
     },
     /// The values reach their zero set but their spheres do not all touch it: `covered` of the
-    /// spheres near it lie inside the union of others, as a bound's (a CSG tree's) do; the mesh
-    /// is the field's zero set ([`crate::Field::LevelSet`]).
+    /// spheres near it lie inside the union of others, as a bound's (a CSG tree's) do; they were
+    /// read as bounds ([`crate::Field::Bound`]).
     Bound {
         /// [`crate::FieldReport::covered`].
         covered: f64,
@@ -134,7 +134,7 @@ impl fmt::Display for Warning {
             ),
             Self::Bound { covered } => write!(
                 f,
-                "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
+                "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; read as bounds: every sphere stays empty space, but the tangency points off the zero set of the grid's smooth interpolant were moved onto it by Newton's method and the spheres were not fitted (field = distance reads them as distances)",
                 100.0 * covered
             ),
             Self::Clamped { at, samples } => write!(
