@@ -5,7 +5,8 @@
 //! else the nearest) and must have one; later collapses of that face hand it on (the bookkeeping
 //! of Hausdorff-bounded simplifiers since Klein, Liebich and Strasser, "Mesh reduction with error
 //! control", 1996). Output to input: each collapse's new vertex and its new faces' centroids
-//! must lie within the tolerance of the input surface. The largest distance either way is kept.
+//! must lie within the tolerance of the input surface (`nearest.rs` finds how near). The largest
+//! distance either way is kept.
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
@@ -13,14 +14,17 @@ use rfta_geom::kernels::closest_point_on_triangle;
 use rfta_mesh::MeshIndex;
 
 use crate::editable::Change;
+use crate::nearest::Nearest;
 
 /// Input vertex ids carried by the current faces, and the largest deviation so far.
 pub(crate) struct Deviation<'a> {
-    input: &'a MeshIndex,
-    input_vertices: Vec<DVec3>,
+    input: Nearest<'a>,
+    input_vertices: &'a [DVec3],
     tolerance_squared: f64,
     /// For each current vertex, the input vertex at whose place it still is (`u32::MAX`: moved).
     unmoved: Vec<u32>,
+    /// For each current vertex, an input face near it (`u32::MAX`: none known).
+    foot: Vec<u32>,
     /// For each face, the input vertices it carries.
     carried: Vec<Vec<u32>>,
     pub(crate) largest: f64,
@@ -32,14 +36,20 @@ pub(crate) struct Deviation<'a> {
 pub(crate) struct HandOver {
     moves: Vec<(u32, usize)>,
     largest: f64,
+    /// The input face nearest the new vertex.
+    foot: u32,
 }
 
 impl<'a> Deviation<'a> {
     /// The bookkeeping of `mesh`, whose index is `input`.
-    pub(crate) fn new(mesh: &TriMesh, input: &'a MeshIndex, tolerance: f64) -> Self {
+    pub(crate) fn new(mesh: &'a TriMesh, input: &'a MeshIndex, tolerance: f64) -> Self {
+        let input = Nearest::new(mesh, input);
         Self {
+            foot: (0..mesh.n_vertices() as u32)
+                .map(|v| input.a_face_of(v))
+                .collect(),
             input,
-            input_vertices: mesh.vertices.clone(),
+            input_vertices: &mesh.vertices,
             tolerance_squared: tolerance * tolerance,
             unmoved: (0..mesh.n_vertices() as u32).collect(),
             carried: vec![Vec::new(); mesh.n_faces()],
@@ -53,11 +63,19 @@ impl<'a> Deviation<'a> {
         out.moves.clear();
         out.largest = 0.0;
         let tol2 = self.tolerance_squared;
-        // Output to input: the new vertex and the new faces' centroids.
-        let centroids = change.after.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0);
-        for p in std::iter::once(change.target).chain(centroids) {
-            match self.input.closest_point_within(p, tol2) {
-                Some(c) => out.largest = out.largest.max(c.distance_squared),
+        // Output to input: the new vertex (walked to from `a`'s face) and the new faces'
+        // centroids (from the new vertex's).
+        let Some((foot, d2)) = self
+            .input
+            .within(change.target, self.foot[a as usize], tol2)
+        else {
+            return false;
+        };
+        out.foot = foot;
+        out.largest = d2;
+        for t in &change.after {
+            match self.input.within((t[0] + t[1] + t[2]) / 3.0, foot, tol2) {
+                Some((_, d2)) => out.largest = out.largest.max(d2),
                 None => return false,
             }
         }
@@ -106,6 +124,7 @@ impl<'a> Deviation<'a> {
         }
         self.unmoved[a as usize] = u32::MAX;
         self.unmoved[b as usize] = u32::MAX;
+        self.foot[a as usize] = hand_over.foot;
         self.largest = self.largest.max(hand_over.largest.sqrt());
     }
 }

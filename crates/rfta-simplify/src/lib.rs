@@ -40,6 +40,7 @@ mod buckets;
 mod collapse;
 mod deviation;
 mod editable;
+mod nearest;
 mod patch;
 mod polylines;
 mod quadric;
@@ -105,7 +106,9 @@ pub struct Simplified {
     /// Edge collapses made (each removes two faces and a vertex).
     pub collapses: usize,
     /// The largest distance measured between the input and the output, both ways (at most
-    /// [`Options::tolerance`]; see the crate documentation for where it is measured).
+    /// [`Options::tolerance`]; see the crate documentation for where it is measured). From the
+    /// output to the input it is measured to the input face a walk from a nearby face reached,
+    /// the nearest face near there: no less than the distance to the input.
     pub largest_deviation: f64,
 }
 
