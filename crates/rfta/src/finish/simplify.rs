@@ -188,8 +188,14 @@ impl Judge for SampleJudge {
             {
                 return false;
             }
+            // Not entered deeper than the slack: beyond the slab, beyond the ball, or no face
+            // after within.
             let deep = s.radius - self.slack;
-            if !self.spheres_bind || deep <= 0.0 || outside >= deep || !patch.after_within(p, deep)
+            if !self.spheres_bind
+                || deep <= 0.0
+                || outside >= deep
+                || p.distance(centre) - radius >= deep
+                || !patch.after_within(p, deep)
             {
                 return true;
             }
