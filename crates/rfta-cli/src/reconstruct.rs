@@ -196,8 +196,8 @@ pub(crate) struct Tuning {
     #[serde(skip_serializing_if = "Clone::clone")]
     simplify: bool,
     /// How far the simplified surface may lie from the unsimplified one, in sample spacings
-    /// (default 0.8 / N for samples N spacings across: 0.08 at N = 10, 0.016 at N = 50; with
-    /// --faces, 1 unless given).
+    /// (default 0.8 / N for samples N spacings across, within 0.008 to 0.06: 0.06 at N = 10,
+    /// 0.016 at N = 50, 0.008 from N = 100; with --faces, 1 unless given).
     #[arg(long, visible_alias = "tolerance", value_name = "SPACINGS", value_parser = crate::ui::parse_non_negative)]
     #[serde(skip_serializing_if = "Option::is_none")]
     simplify_tolerance: Option<f64>,

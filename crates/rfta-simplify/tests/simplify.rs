@@ -338,3 +338,22 @@ fn a_polyline_judge_keeps_what_it_refuses() {
     }
     assert!(out.curve.edges.len() < 360);
 }
+
+/// The default tolerance: `0.8 / N` spacings for samples N spacings across, no more than 0.06
+/// (coarse samples) and no less than 0.008 (fine ones).
+#[test]
+fn the_default_tolerance_follows_the_spacing_within_its_bounds() {
+    let cases = [
+        (1.0, 0.06),
+        (10.0, 0.06),
+        (20.0, 0.04),
+        (50.0, 0.016),
+        (100.0, 0.008),
+        (128.0, 0.008),
+        (1e6, 0.008),
+    ];
+    for (per_axis, spacings) in cases {
+        let got = rfta_simplify::default_tolerance(per_axis);
+        assert!((got - spacings).abs() < 1e-12, "{per_axis}: {got}");
+    }
+}

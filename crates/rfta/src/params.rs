@@ -127,7 +127,7 @@ pub struct Params {
     pub simplify: bool,
     /// How far, in sample spacings, the simplified surface may lie from the unsimplified one.
     /// `None`: [`rfta_simplify::default_tolerance`], `0.8 h / L` spacings (`h` the spacing, `L`
-    /// the samples' longest extent: 0.04 at N = 20, 0.016 at N = 50) and at most 0.06, or one
+    /// the samples' longest extent: 0.04 at N = 20, 0.016 at N = 50) within 0.008 to 0.06, or one
     /// spacing when [`Params::faces`] is set (a budget of faces may cost accuracy, not what the
     /// samples resolve).
     pub simplify_tolerance: Option<f64>,

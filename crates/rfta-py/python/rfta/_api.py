@@ -332,7 +332,7 @@ def reconstruct(
     simplify, simplify_tolerance, faces
         By default the mesh is simplified: edges collapsed while the surface stays within
         ``simplify_tolerance`` sample spacings (default 0.8 / N for samples N spacings
-        across) of the unsimplified one, no sample
+        across, within 0.008 to 0.06) of the unsimplified one, no sample
         changes side, no sphere is entered past the consistency check's margin and the topology
         stays the same; ``faces`` asks for at most that many faces (within one spacing unless
         a tolerance is given). ``simplify=False`` returns the mesh unsimplified (``rfta reconstruct
