@@ -25,6 +25,10 @@ pub(crate) struct Deviation<'a> {
     unmoved: Vec<u32>,
     /// For each current vertex, an input face near it (`u32::MAX`: none known).
     foot: Vec<u32>,
+    /// For each face, an input face near its centroid: itself at first, then the one found when
+    /// a collapse last moved it (a collapse moves a face's centroid by a third of its vertex's
+    /// move, so the walk from there is short).
+    centroid_foot: Vec<u32>,
     /// For each face, the input vertices it carries.
     carried: Vec<Vec<u32>>,
     pub(crate) largest: f64,
@@ -38,6 +42,8 @@ pub(crate) struct HandOver {
     largest: f64,
     /// The input face nearest the new vertex.
     foot: u32,
+    /// The input face nearest each new face's centroid.
+    centroid_feet: Vec<u32>,
 }
 
 impl<'a> Deviation<'a> {
@@ -52,6 +58,7 @@ impl<'a> Deviation<'a> {
             input_vertices: &mesh.vertices,
             tolerance_squared: tolerance * tolerance,
             unmoved: (0..mesh.n_vertices() as u32).collect(),
+            centroid_foot: (0..mesh.n_faces() as u32).collect(),
             carried: vec![Vec::new(); mesh.n_faces()],
             largest: 0.0,
         }
@@ -61,10 +68,11 @@ impl<'a> Deviation<'a> {
     /// the hand-over into `out` when it does.
     pub(crate) fn allows(&self, a: u32, b: u32, change: &Change, out: &mut HandOver) -> bool {
         out.moves.clear();
+        out.centroid_feet.clear();
         out.largest = 0.0;
         let tol2 = self.tolerance_squared;
         // Output to input: the new vertex (walked to from `a`'s face) and the new faces'
-        // centroids (from the new vertex's).
+        // centroids (each from its face's centroid before).
         let Some((foot, d2)) = self
             .input
             .within(change.target, self.foot[a as usize], tol2)
@@ -73,9 +81,13 @@ impl<'a> Deviation<'a> {
         };
         out.foot = foot;
         out.largest = d2;
-        for t in &change.after {
-            match self.input.within((t[0] + t[1] + t[2]) / 3.0, foot, tol2) {
-                Some((_, d2)) => out.largest = out.largest.max(d2),
+        for (t, &f) in change.after.iter().zip(&change.after_ids) {
+            let from = self.centroid_foot[f as usize];
+            match self.input.within((t[0] + t[1] + t[2]) / 3.0, from, tol2) {
+                Some((g, d2)) => {
+                    out.largest = out.largest.max(d2);
+                    out.centroid_feet.push(g);
+                }
                 None => return false,
             }
         }
@@ -125,6 +137,9 @@ impl<'a> Deviation<'a> {
         self.unmoved[a as usize] = u32::MAX;
         self.unmoved[b as usize] = u32::MAX;
         self.foot[a as usize] = hand_over.foot;
+        for (&f, &g) in change.after_ids.iter().zip(&hand_over.centroid_feet) {
+            self.centroid_foot[f as usize] = g;
+        }
         self.largest = self.largest.max(hand_over.largest.sqrt());
     }
 }
