@@ -1,9 +1,10 @@
 //! The input surface's nearest face to a point a collapse places, found by walking from a face
-//! near it: a collapse's new vertex lies within a few input faces of the faces its edge's ends
-//! were placed on, and its new faces' centroids within a few of the new vertex's. The walk
-//! steps to a neighbouring face while one is nearer; where it ends farther than the tolerance
-//! (a fold, a thin part), the index answers. A walk that ends within the tolerance proves that
-//! the input is that near, so what passes is what the index alone would pass.
+//! near it: a collapse's new vertex lies within a few input faces of the face its edge's kept end
+//! was placed on, and each new face's centroid within a few of the face found for that face's
+//! centroid before (`deviation.rs` keeps both). The walk steps to a neighbouring face while one
+//! is nearer; where it ends farther than the tolerance (a fold, a thin part), the index answers.
+//! A walk that ends within the tolerance proves that the input is that near, so what passes is
+//! what the index alone would pass.
 
 use rayon::prelude::*;
 use rfta_geom::TriMesh;
