@@ -38,17 +38,13 @@ impl Patch<'_> {
     }
 
     /// Whether some face after comes closer to `p` than `d` (cheaper than
-    /// [`Patch::distance_after`] where most faces are far: each face's bounding ball first).
+    /// [`Patch::distance_after`] where most faces are far: each face's bounding box first).
     pub fn after_within(&self, p: DVec3, d: f64) -> bool {
+        let d2 = d * d;
         self.after.iter().any(|t| {
-            let c = (t[0] + t[1] + t[2]) / 3.0;
-            let reach = t
-                .iter()
-                .map(|v| v.distance_squared(c))
-                .fold(0.0, f64::max)
-                .sqrt();
-            p.distance(c) - reach < d
-                && p.distance_squared(closest_point_on_triangle(p, t[0], t[1], t[2]).0) < d * d
+            let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+            p.distance_squared(p.clamp(lo, hi)) < d2
+                && p.distance_squared(closest_point_on_triangle(p, t[0], t[1], t[2]).0) < d2
         })
     }
 
