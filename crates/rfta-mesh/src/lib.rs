@@ -17,7 +17,8 @@
 //!   exceeds 1/2 (libigl's convention), so it works on meshes with small holes too.
 //! - [`sample_surface`]: area-weighted random points with a seed.
 //! - [`Topology`]: watertight, manifold, oriented, Euler characteristic, genus, components;
-//!   [`face_components`], their [`signed_volume`], the inward ones ([`cavities`]).
+//!   [`face_components`], their [`signed_volume`], the inward ones ([`cavities`]);
+//!   [`Incidence`], the faces around each vertex.
 //! - [`short_loops`]: the handles a short loop goes around (thinner than a sampling resolves);
 //!   [`cut_along`] such a loop, [`join`] two components by a tube.
 //!
@@ -41,6 +42,7 @@
 mod build;
 mod bvh;
 mod components;
+mod incidence;
 mod loops;
 mod moments;
 mod node;
@@ -54,6 +56,7 @@ mod winding;
 
 pub use bvh::{ClosestPoint, MeshIndex, Shell};
 pub use components::{cavities, face_components, signed_volume};
+pub use incidence::Incidence;
 pub use loops::{ShortLoops, short_loops};
 pub use polylines::{Closest, PolylineIndex};
 pub use rfta_geom::TriMesh;

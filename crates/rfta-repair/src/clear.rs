@@ -7,7 +7,8 @@ use rfta_geom::glam::DVec3;
 use rfta_sphere_tree::SphereTree;
 
 use crate::Spheres;
-use crate::edit::{Incidence, Splitter, apply_moves};
+use crate::edit::{Splitter, apply_moves};
+use rfta_mesh::Incidence;
 
 /// Passes of [`push_out_of_spheres`] per vertex: leaving the deepest sphere can land a vertex in
 /// a neighbour, which the next pass leaves in turn.

@@ -3,7 +3,8 @@
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, TriMesh};
 
-use crate::edit::{Incidence, Splitter};
+use crate::edit::Splitter;
+use rfta_mesh::Incidence;
 
 /// Samples this close to the surface (in spacings) are the ones [`dent_wrong_side`] looks at.
 pub(crate) const DENT_BELOW: f64 = 0.5;

@@ -1,9 +1,10 @@
-//! Edits of a mesh that keep it a surface: the faces around each vertex ([`Incidence`]), vertex
-//! moves taken without turning a face over ([`apply_moves`]), and new vertices on faces or edges
-//! ([`Splitter`]).
+//! Edits of a mesh that keep it a surface, given the faces around each vertex
+//! ([`rfta_mesh::Incidence`]): vertex moves taken without turning a face over ([`apply_moves`]),
+//! and new vertices on faces or edges ([`Splitter`]).
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
+use rfta_mesh::Incidence;
 
 /// How many times [`apply_moves`] goes over the vertices.
 pub(crate) const MOVE_SWEEPS: usize = 8;
@@ -61,42 +62,6 @@ pub fn apply_moves(
         .filter(|&(&(v, _), o)| mesh.vertices[v as usize] != *o)
         .map(|(&(v, _), _)| v)
         .collect()
-}
-
-/// The faces around each vertex of a mesh.
-pub struct Incidence {
-    /// Where each vertex's faces start in `faces` (one more entry than vertices).
-    start: Vec<u32>,
-    faces: Vec<u32>,
-}
-
-impl Incidence {
-    /// The faces around each vertex of `mesh`.
-    pub fn of(mesh: &TriMesh) -> Self {
-        let mut start = vec![0u32; mesh.vertices.len() + 1];
-        for face in &mesh.faces {
-            for &v in face {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..mesh.vertices.len() {
-            start[v + 1] += start[v];
-        }
-        let mut at = start.clone();
-        let mut faces = vec![0u32; start[mesh.vertices.len()] as usize];
-        for (f, face) in mesh.faces.iter().enumerate() {
-            for &v in face {
-                faces[at[v as usize] as usize] = f as u32;
-                at[v as usize] += 1;
-            }
-        }
-        Self { start, faces }
-    }
-
-    /// The faces around vertex `v`.
-    pub fn faces(&self, v: u32) -> &[u32] {
-        &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
-    }
 }
 
 /// Puts new vertices on a mesh's faces or edges, each face at most once (faces a split has made
@@ -188,7 +153,7 @@ impl<'a> Splitter<'a> {
     /// Moves vertex `v` to `to`, unless a face around it was split already or would turn over,
     /// or `v` is a vertex a split made (its faces are split ones).
     pub fn move_vertex(&mut self, mesh: &mut TriMesh, v: u32, to: DVec3) -> bool {
-        if v as usize + 1 >= self.incident.start.len() {
+        if v as usize >= self.incident.n_vertices() {
             return false;
         }
         let around = self.incident.faces(v);

@@ -2,8 +2,9 @@
 
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, Sphere, TriMesh, shapes};
+use rfta_mesh::Incidence;
 use rfta_mesh::Topology;
-use rfta_repair::edit::{Incidence, Splitter};
+use rfta_repair::edit::Splitter;
 use rfta_repair::{
     Frame, Island, Spheres, apply_moves, clear_spheres, cut_sub_cell_handles, dent_wrong_side,
     face_components, remove_islands, signed_volume, to_genus,

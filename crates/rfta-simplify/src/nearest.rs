@@ -10,19 +10,17 @@ use rayon::prelude::*;
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 use rfta_geom::kernels::closest_point_on_triangle;
-use rfta_mesh::MeshIndex;
+use rfta_mesh::{Incidence, MeshIndex};
 
 /// A walk that has not ended after this many steps hands over to the index.
 const MAX_STEPS: usize = 64;
 
-/// The input mesh with each vertex's faces, and its index.
+/// The input mesh with each vertex's faces and the face across each edge, and its index.
 pub(crate) struct Nearest<'a> {
     index: &'a MeshIndex,
     vertices: &'a [DVec3],
     faces: &'a [[u32; 3]],
-    /// The faces of vertex `v` are `fans[starts[v]..starts[v + 1]]`.
-    starts: Vec<u32>,
-    fans: Vec<u32>,
+    incidence: Incidence,
     /// The face across the edge opposite corner `k` of face `f` is `across[3 f + k]`
     /// (`u32::MAX`: none, or more than one).
     across: Vec<u32>,
@@ -31,39 +29,15 @@ pub(crate) struct Nearest<'a> {
 impl<'a> Nearest<'a> {
     /// `mesh`, whose index is `index`.
     pub(crate) fn new(mesh: &'a TriMesh, index: &'a MeshIndex) -> Self {
-        let mut starts = vec![0u32; mesh.n_vertices() + 1];
-        for face in &mesh.faces {
-            for &v in face {
-                starts[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..mesh.n_vertices() {
-            starts[v + 1] += starts[v];
-        }
-        let mut fill = starts.clone();
-        let mut fans = vec![0u32; 3 * mesh.n_faces()];
-        for (f, face) in mesh.faces.iter().enumerate() {
-            for &v in face {
-                fans[fill[v as usize] as usize] = f as u32;
-                fill[v as usize] += 1;
-            }
-        }
-        let mut nearest = Self {
-            index,
-            vertices: &mesh.vertices,
-            faces: &mesh.faces,
-            starts,
-            fans,
-            across: Vec::new(),
-        };
-        nearest.across = (0..3 * mesh.n_faces())
+        let incidence = Incidence::of(mesh);
+        let across = (0..3 * mesh.n_faces())
             .into_par_iter()
             .map(|i| {
                 let (f, k) = (i / 3, i % 3);
                 let face = mesh.faces[f];
                 let (u, v) = (face[(k + 1) % 3], face[(k + 2) % 3]);
-                let mut beside = nearest
-                    .fan(u)
+                let mut beside = incidence
+                    .faces(u)
                     .iter()
                     .filter(|&&g| g as usize != f && mesh.faces[g as usize].contains(&v));
                 match (beside.next(), beside.next()) {
@@ -72,12 +46,18 @@ impl<'a> Nearest<'a> {
                 }
             })
             .collect();
-        nearest
+        Self {
+            index,
+            vertices: &mesh.vertices,
+            faces: &mesh.faces,
+            incidence,
+            across,
+        }
     }
 
     /// A face of input vertex `v` (`u32::MAX` when it has none): where a walk from it starts.
     pub(crate) fn a_face_of(&self, v: u32) -> u32 {
-        self.fan(v).first().copied().unwrap_or(u32::MAX)
+        self.incidence.faces(v).first().copied().unwrap_or(u32::MAX)
     }
 
     /// The input face nearest `p` and the squared distance to it, when within `tolerance_squared`:
@@ -120,7 +100,7 @@ impl<'a> Nearest<'a> {
                 // At the corner whose coordinate is not.
                 2 => {
                     let k = bary.iter().position(|&b| b > 0.0).unwrap_or(0);
-                    self.fan(face[k]).iter().for_each(|&g| offer(g));
+                    self.incidence.faces(face[k]).iter().for_each(|&g| offer(g));
                 }
                 _ => break,
             }
@@ -136,11 +116,6 @@ impl<'a> Nearest<'a> {
         let [a, b, c] = self.faces[f as usize].map(|v| self.vertices[v as usize]);
         let (q, bary) = closest_point_on_triangle(p, a, b, c);
         (p.distance_squared(q), bary)
-    }
-
-    fn fan(&self, v: u32) -> &[u32] {
-        let v = v as usize;
-        &self.fans[self.starts[v] as usize..self.starts[v + 1] as usize]
     }
 }
 
