@@ -27,6 +27,15 @@ struct Entry {
     stamps: [u32; 2],
 }
 
+impl Entry {
+    /// Whether neither end was collapsed since the edge was priced, by the vertices' edit
+    /// counts `stamps` (a removed vertex's count moved on when it was removed, so an edge of it
+    /// is not current either).
+    fn is_current(&self, stamps: &[u32]) -> bool {
+        self.stamps == [stamps[self.keep as usize], stamps[self.drop as usize]]
+    }
+}
+
 /// Collapses edges while the mesh has more than `max_faces` faces and some collapse passes;
 /// returns the number made.
 ///
@@ -44,6 +53,8 @@ pub(crate) fn run(
     let mut queue = Queue::new(mesh);
     let mut taken_by = vec![u32::MAX; mesh.positions.len()];
     let mut around = Vec::new();
+    let mut edges = Vec::new();
+    let mut tries: Vec<Try> = (0..BATCH).map(|_| Try::default()).collect();
     let mut collapses = 0;
     let mut round = 0u32;
     while mesh.live_faces > max_faces {
@@ -52,30 +63,32 @@ pub(crate) fn run(
         if batch.is_empty() {
             break;
         }
-        let tried: Vec<Option<(Change, HandOver)>> = batch
-            .par_iter()
-            .map(|&(ref e, target)| try_collapse(mesh, deviation, judge, e, target))
-            .collect();
-        for ((e, target), passed) in batch.iter().zip(tried) {
-            let Some((change, hand_over)) = passed else {
+        tries[..batch.len()]
+            .par_iter_mut()
+            .zip(&batch)
+            .for_each(|(t, e)| t.run(mesh, deviation, judge, &queue, e));
+        edges.clear();
+        for (e, t) in batch.iter().zip(&tries) {
+            if !t.passed {
                 continue;
-            };
+            }
             if mesh.live_faces <= max_faces {
                 break;
             }
             let (a, b) = (e.keep, e.drop);
-            deviation.commit(a, b, &change, &hand_over);
-            mesh.collapse(a, b, *target);
+            deviation.commit(a, b, &t.change, &t.hand_over);
+            mesh.collapse(a, b, t.change.target);
             collapses += 1;
             let q = queue.quadrics[a as usize].add(&queue.quadrics[b as usize]);
             queue.quadrics[a as usize] = q;
             queue.stamps[a as usize] += 1;
             queue.stamps[b as usize] += 1;
             mesh.neighbours(a, &mut around);
-            for &n in &around {
-                queue.push(mesh, a, n);
-            }
+            edges.extend(around.iter().map(|&n| (a, n)));
         }
+        // Later collapses of the batch touch none of these edges' ends (their changes share no
+        // vertex), so these are the prices each edge had right after its collapse.
+        queue.push_all(mesh, &edges);
         queue.drop_stale(mesh);
     }
     collapses
@@ -84,30 +97,39 @@ pub(crate) fn run(
 /// Edges taken together: no two changes share a vertex.
 const BATCH: usize = 64;
 
-/// The change collapsing `e` makes and its hand-over, when every test passes: the topology,
-/// the faces' shape, the tolerance and the judge, in that order.
-fn try_collapse(
-    mesh: &Editable,
-    deviation: &Deviation<'_>,
-    judge: &dyn Judge,
-    e: &Entry,
-    target: DVec3,
-) -> Option<(Change, HandOver)> {
-    let (a, b) = (e.keep, e.drop);
-    let mut scratch = [Vec::new(), Vec::new()];
-    if !mesh.can_collapse(a, b, &mut scratch) {
-        return None;
+/// One collapse tried: its change and hand-over when it passed. A batch's tries are kept from
+/// one batch to the next, so their lists are allocated once.
+#[derive(Default)]
+struct Try {
+    passed: bool,
+    change: Change,
+    hand_over: HandOver,
+    neighbours: [Vec<u32>; 2],
+}
+
+impl Try {
+    /// Tries collapsing `e` with its vertex where `queue` prices it: the topology, the faces'
+    /// shape, the tolerance and the judge, in that order.
+    fn run(
+        &mut self,
+        mesh: &Editable,
+        deviation: &Deviation<'_>,
+        judge: &dyn Judge,
+        queue: &Queue,
+        e: &Entry,
+    ) {
+        let (a, b) = (e.keep, e.drop);
+        self.passed = mesh.can_collapse(a, b, &mut self.neighbours) && {
+            let target = queue.price(mesh, a, b).1;
+            mesh.change(a, b, target, &mut self.change);
+            keeps_shape(&self.change)
+                && deviation.allows(a, b, &self.change, &mut self.hand_over)
+                && judge.allows(&Patch {
+                    before: &self.change.before,
+                    after: &self.change.after,
+                })
+        };
     }
-    let mut change = Change::default();
-    mesh.change(a, b, target, &mut change);
-    let mut hand_over = HandOver::default();
-    let passes = keeps_shape(&change)
-        && deviation.allows(a, b, &change, &mut hand_over)
-        && judge.allows(&Patch {
-            before: &change.before,
-            after: &change.after,
-        });
-    passes.then_some((change, hand_over))
 }
 
 /// The priority queue of edges and what prices them.
@@ -130,7 +152,7 @@ impl Queue {
         taken_by: &mut [u32],
         round: u32,
         around: &mut Vec<u32>,
-    ) -> Vec<(Entry, DVec3)> {
+    ) -> Vec<Entry> {
         let mut batch = Vec::new();
         let mut waited = std::mem::take(&mut self.waiting).into_iter();
         while batch.len() < BATCH {
@@ -138,10 +160,7 @@ impl Queue {
                 break;
             };
             let (a, b) = (e.keep, e.drop);
-            let current = mesh.is_alive(a)
-                && mesh.is_alive(b)
-                && e.stamps == [self.stamps[a as usize], self.stamps[b as usize]];
-            if !current {
+            if !e.is_current(&self.stamps) {
                 continue;
             }
             around.clear();
@@ -160,8 +179,7 @@ impl Queue {
             for &v in around.iter() {
                 taken_by[v as usize] = round;
             }
-            let target = self.price(mesh, a, b).1;
-            batch.push((e, target));
+            batch.push(e);
         }
         // What waited and was not looked at goes back to the queue.
         for e in waited {
@@ -194,33 +212,37 @@ impl Queue {
             stamps: vec![0; n],
         };
         let mut around = Vec::new();
+        let mut edges = Vec::new();
         for v in 0..n as u32 {
-            if mesh.is_locked(v) {
-                continue;
-            }
             mesh.neighbours(v, &mut around);
-            for &u in around.iter().filter(|&&u| u > v) {
-                queue.push(mesh, v, u);
-            }
+            edges.extend(around.iter().filter(|&&u| u > v).map(|&u| (v, u)));
         }
+        queue.push_all(mesh, &edges);
         queue
     }
 
-    /// Prices the edge `u`-`v` (kept: the lower id) and queues it, unless either end is locked.
-    fn push(&mut self, mesh: &Editable, u: u32, v: u32) {
-        let (keep, drop) = (u.min(v), u.max(v));
-        if mesh.is_locked(keep) || mesh.is_locked(drop) {
-            return;
+    /// Prices the edges `u`-`v` (kept: the lower id), in parallel, and queues them in their
+    /// order, but those with a locked end.
+    fn push_all(&mut self, mesh: &Editable, edges: &[(u32, u32)]) {
+        let priced: Vec<Option<(f64, Entry)>> = edges
+            .par_iter()
+            .with_min_len(1024)
+            .map(|&(u, v)| {
+                let (keep, drop) = (u.min(v), u.max(v));
+                if mesh.is_locked(keep) || mesh.is_locked(drop) {
+                    return None;
+                }
+                let entry = Entry {
+                    keep,
+                    drop,
+                    stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
+                };
+                Some((self.price(mesh, keep, drop).0, entry))
+            })
+            .collect();
+        for (cost, entry) in priced.into_iter().flatten() {
+            self.queue.push(cost, entry);
         }
-        let cost = self.price(mesh, keep, drop).0;
-        self.queue.push(
-            cost,
-            Entry {
-                keep,
-                drop,
-                stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
-            },
-        );
     }
 
     /// Drops the stale entries once they are most of the queue (three for each live edge).
@@ -228,11 +250,7 @@ impl Queue {
         let live_edges = 3 * mesh.live_faces / 2;
         if self.queue.len() > 4 * live_edges {
             let stamps = &self.stamps;
-            self.queue.retain(|e| {
-                mesh.is_alive(e.keep)
-                    && mesh.is_alive(e.drop)
-                    && e.stamps == [stamps[e.keep as usize], stamps[e.drop as usize]]
-            });
+            self.queue.retain(|e| e.is_current(stamps));
         }
     }
 

@@ -11,7 +11,6 @@ pub(crate) struct Editable {
     face_alive: Vec<bool>,
     /// Each vertex's live faces, in no particular order.
     incident: Vec<Vec<u32>>,
-    vertex_alive: Vec<bool>,
     /// Vertices never moved nor removed: those on a boundary or non-manifold edge, or whose faces
     /// do not form one fan.
     locked: Vec<bool>,
@@ -50,7 +49,6 @@ impl Editable {
                 .map(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0])
                 .collect(),
             incident,
-            vertex_alive: vec![true; n],
             locked: vec![false; n],
             live_faces: 0,
         };
@@ -108,10 +106,6 @@ impl Editable {
         self.locked[v as usize]
     }
 
-    pub(crate) fn is_alive(&self, v: u32) -> bool {
-        self.vertex_alive[v as usize]
-    }
-
     pub(crate) fn faces_of(&self, v: u32) -> &[u32] {
         &self.incident[v as usize]
     }
@@ -135,12 +129,18 @@ impl Editable {
         if self.locked[a as usize] || self.locked[b as usize] {
             return false;
         }
-        let shared: Vec<u32> = self.incident[a as usize]
-            .iter()
-            .copied()
-            .filter(|f| self.faces[*f as usize].contains(&b))
-            .collect();
-        if shared.len() != 2 {
+        let mut shared = [u32::MAX; 2];
+        let mut n_shared = 0;
+        for &f in &self.incident[a as usize] {
+            if self.faces[f as usize].contains(&b) {
+                if n_shared == 2 {
+                    return false;
+                }
+                shared[n_shared] = f;
+                n_shared += 1;
+            }
+        }
+        if n_shared != 2 {
             return false;
         }
         let third = |f: u32| {
@@ -148,11 +148,19 @@ impl Editable {
             face.into_iter().find(|&u| u != a && u != b).unwrap_or(a)
         };
         let (c, d) = (third(shared[0]), third(shared[1]));
+        // Free vertices' faces form one closed fan: the vertex after `a` in each of its faces is
+        // each of its neighbours once (no sorting out of repeats); `c` and `d` are among them.
         let [na, nb] = scratch;
-        self.neighbours(a, na);
-        self.neighbours(b, nb);
-        let common = na.iter().filter(|x| nb.binary_search(x).is_ok()).count();
-        if common != 2 || c == d || na.binary_search(&c).is_err() || na.binary_search(&d).is_err() {
+        for (v, out) in [(a, &mut *na), (b, &mut *nb)] {
+            out.clear();
+            out.extend(
+                self.incident[v as usize]
+                    .iter()
+                    .map(|&f| self.after(f, v).0),
+            );
+        }
+        let common = na.iter().filter(|x| nb.contains(x)).count();
+        if common != 2 || c == d {
             return false;
         }
         // The merged vertex has |na| + |nb| - 4 neighbours (a, b and the two shared ones go);
@@ -214,7 +222,6 @@ impl Editable {
                 self.incident[a as usize].push(f);
             }
         }
-        self.vertex_alive[b as usize] = false;
         self.positions[a as usize] = target;
     }
 
