@@ -193,30 +193,39 @@ impl Queue {
     /// between two free vertices is priced.
     fn new(mesh: &Editable) -> Self {
         let n = mesh.positions.len();
-        let mut quadrics = vec![Quadric::default(); n];
-        for v in 0..n as u32 {
-            for &f in mesh.faces_of(v) {
-                let [p, q, r] = mesh.faces[f as usize].map(|u| mesh.positions[u as usize]);
-                let scaled = (q - p).cross(r - p);
-                let area2 = scaled.length();
-                if area2 > 0.0 {
-                    let plane = Quadric::plane(p, scaled / area2, 0.5 * area2);
-                    quadrics[v as usize] = quadrics[v as usize].add(&plane);
+        let quadrics = (0..n as u32)
+            .into_par_iter()
+            .map(|v| {
+                let mut quadric = Quadric::default();
+                for &f in mesh.faces_of(v) {
+                    let [p, q, r] = mesh.faces[f as usize].map(|u| mesh.positions[u as usize]);
+                    let scaled = (q - p).cross(r - p);
+                    let area2 = scaled.length();
+                    if area2 > 0.0 {
+                        let plane = Quadric::plane(p, scaled / area2, 0.5 * area2);
+                        quadric = quadric.add(&plane);
+                    }
                 }
-            }
-        }
+                quadric
+            })
+            .collect();
         let mut queue = Self {
             queue: Buckets::new(),
             waiting: Vec::new(),
             quadrics,
             stamps: vec![0; n],
         };
-        let mut around = Vec::new();
-        let mut edges = Vec::new();
-        for v in 0..n as u32 {
-            mesh.neighbours(v, &mut around);
-            edges.extend(around.iter().filter(|&&u| u > v).map(|&u| (v, u)));
-        }
+        let edges: Vec<(u32, u32)> = (0..n as u32)
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                let mut around = Vec::new();
+                mesh.neighbours(v, &mut around);
+                around
+                    .into_iter()
+                    .filter(move |&u| u > v)
+                    .map(move |u| (v, u))
+            })
+            .collect();
         queue.push_all(mesh, &edges);
         queue
     }

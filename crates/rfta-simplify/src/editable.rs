@@ -1,6 +1,7 @@
 //! The mesh being simplified: positions, faces and each vertex's faces, edited one edge collapse
 //! at a time, with the combinatorial test that keeps a closed manifold closed and manifold.
 
+use rayon::prelude::*;
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
 
@@ -53,12 +54,20 @@ impl Editable {
             live_faces: 0,
         };
         e.live_faces = e.face_alive.iter().filter(|&&a| a).count();
-        for v in 0..n {
-            let live = |f: &u32| e.face_alive[*f as usize];
-            let all = e.incident[v].len();
-            e.incident[v].retain(live);
-            e.locked[v] = e.incident[v].len() != all || !e.is_one_fan(v as u32);
-        }
+        let face_alive = &e.face_alive;
+        let trimmed: Vec<bool> = e
+            .incident
+            .par_iter_mut()
+            .map(|faces| {
+                let all = faces.len();
+                faces.retain(|f| face_alive[*f as usize]);
+                faces.len() != all
+            })
+            .collect();
+        e.locked = (0..n)
+            .into_par_iter()
+            .map(|v| trimmed[v] || !e.is_one_fan(v as u32))
+            .collect();
         e
     }
 
