@@ -14,6 +14,7 @@ use crate::triangulate::triangulate;
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
+use crate::flat::Leaves;
 use crate::tree::{Frame, Level};
 
 /// A point in finest-depth integer coordinates.
@@ -43,6 +44,7 @@ struct Ctx<'a> {
     values: &'a [Vec<f64>],
     iso: f64,
     depth: u32,
+    leaves: &'a Leaves,
 }
 
 #[derive(Clone, Copy)]
@@ -63,9 +65,10 @@ impl Ctx<'_> {
         Some(self.values[d as usize][node as usize])
     }
 
+    /// Whether the extraction splits the depth-`d` cell `c` (a cell taken whole is a leaf).
     fn refined_cell(&self, d: u32, c: [i64; 3]) -> bool {
         let level = &self.levels[d as usize];
-        level.cell(c).is_some_and(|i| level.refined[i as usize])
+        level.cell(c).is_some_and(|i| self.leaves.is_split(d, i))
     }
 
     /// Leaf corners strictly inside the depth-`d` edge from `start` along `axis`, ascending.
@@ -132,12 +135,45 @@ impl Ctx<'_> {
     fn vertex(&self, a: BPoint, b: BPoint, out: &mut LeafOut) -> u64 {
         let (lo, hi) = if a.q <= b.q { (a, b) } else { (b, a) };
         let axis = (0..3).find(|&i| lo.q[i] != hi.q[i]).unwrap_or(0);
+        let key = vkey(lo.q, axis);
+        let (lo, hi) = if self.leaves.merged {
+            self.bracket(lo, hi, axis)
+        } else {
+            (lo, hi)
+        };
         let t = ((self.iso - lo.v) / (hi.v - lo.v)).clamp(0.0, 1.0);
         let ql = DVec3::new(f64::from(lo.q[0]), f64::from(lo.q[1]), f64::from(lo.q[2]));
         let qh = DVec3::new(f64::from(hi.q[0]), f64::from(hi.q[1]), f64::from(hi.q[2]));
-        let key = vkey(lo.q, axis);
         out.verts.push((key, ql + (qh - ql) * t));
         key
+    }
+
+    /// The shortest piece of the edge from `lo` to `hi` (along `axis`, the iso-value between
+    /// their values) in which the finer depths' nodes on it bracket the crossing: the edge halved
+    /// while its middle is a node, keeping the half whose ends straddle the iso-value. An edge of
+    /// a cell taken whole thereby gets the vertex the tree's own leaves would give it.
+    fn bracket(&self, mut lo: BPoint, mut hi: BPoint, axis: usize) -> (BPoint, BPoint) {
+        let inside = |v: f64| v > self.iso;
+        loop {
+            // Edges run between corners of cells, so their lengths are powers of two.
+            let half = (hi.q[axis] - lo.q[axis]) / 2;
+            if half == 0 {
+                return (lo, hi);
+            }
+            let d = self.depth - half.trailing_zeros();
+            let s = self.depth - d;
+            let mut q = lo.q;
+            q[axis] += half;
+            let Some(v) = self.value(d, q.map(|v| i64::from(v >> s))) else {
+                return (lo, hi);
+            };
+            let mid = BPoint { q, v };
+            if inside(lo.v) == inside(v) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
     }
 
     fn face(&self, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
@@ -304,16 +340,23 @@ pub(crate) fn leaves_cube(levels: &[Level], values: &[Vec<f64>], iso: f64) -> bo
 /// Most cut leaves a parallel task of [`extract`] takes.
 const LEAVES_PER_TASK: usize = 64;
 
-/// Extract the iso-surface `χ = iso` (triangles oriented toward decreasing χ, i.e. outward).
-pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extracted {
+/// Extract the iso-surface `χ = iso` (triangles oriented toward decreasing χ, i.e. outward) over
+/// `leaves`.
+pub(crate) fn extract(
+    levels: &[Level],
+    values: &[Vec<f64>],
+    iso: f64,
+    leaves: &Leaves,
+) -> Extracted {
     let depth = levels.len() as u32 - 1;
     let ctx = Ctx {
         levels,
         values,
         iso,
         depth,
+        leaves,
     };
-    let cand = cut_leaves(levels, values, iso);
+    let cand = cut_leaves(levels, values, iso, leaves);
 
     // Leaves vary in work (most hold one small loop, a few several): tasks of at most
     // `LEAVES_PER_TASK` keep both threads busy to the end. Each task gathers its leaves' output
@@ -388,7 +431,7 @@ pub(crate) fn extract(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Extrac
 /// The leaves to extract, as (depth, cell) sorted and once each: those with a sign change among
 /// their corners, and the coarser leaves that share an edge or a face with them (their boundary
 /// may be cut by the finer leaf's corners).
-fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Vec<(u32, u32)> {
+fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64, leaves: &Leaves) -> Vec<(u32, u32)> {
     let inside = |v: f64| v > iso;
     let mut cand: Vec<(u32, u32)> = levels
         .par_iter()
@@ -403,7 +446,8 @@ fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Vec<(u32, u32)
                     let mut out = [(0u32, 0u32); 19];
                     let mut len = 0;
                     let corners = &level.corners[ci];
-                    let cut = !level.refined[ci] && {
+                    let leaf = !leaves.is_split(d, ci as u32) && !leaves.is_hidden(d, ci as u32);
+                    let cut = leaf && {
                         let first = inside(vals[corners[0] as usize]);
                         corners.iter().any(|&k| inside(vals[k as usize]) != first)
                     };
@@ -426,18 +470,27 @@ fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64) -> Vec<(u32, u32)
                             continue;
                         }
                         let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
-                        if k.iter().any(|&v| v < 0 || v >= n) || level.cell(k).is_some() {
+                        if k.iter().any(|&v| v < 0 || v >= n) {
                             continue;
                         }
+                        // The leaf there: the cell of this depth if it is one (it is then taken
+                        // on its own), else the coarsest cell holding it that is not hidden.
                         let mut dd = d;
-                        while dd > 0 {
-                            dd -= 1;
-                            k = k.map(|v| v >> 1);
-                            if let Some(i) = levels[dd as usize].cell(k) {
-                                out[len] = (dd, i);
-                                len += 1;
+                        loop {
+                            if let Some(i) = levels[dd as usize].cell(k)
+                                && !leaves.is_hidden(dd, i)
+                            {
+                                if dd < d {
+                                    out[len] = (dd, i);
+                                    len += 1;
+                                }
                                 break;
                             }
+                            if dd == 0 {
+                                break;
+                            }
+                            dd -= 1;
+                            k = k.map(|v| v >> 1);
                         }
                     }
                     out.into_iter().take(len)

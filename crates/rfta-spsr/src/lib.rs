@@ -46,6 +46,7 @@
 
 mod basis;
 mod extract;
+mod flat;
 mod keys;
 mod run;
 mod sides;
@@ -127,6 +128,11 @@ pub struct SpsrParams {
     pub iterations: usize,
     /// Conjugate-gradient iterations cap per depth below `full_depth`.
     pub base_iterations: usize,
+    /// Where the surface lies within this distance (in the points' coordinates) of a plane
+    /// across a refined cell up to 3 depths above the finest, the extraction takes the cell
+    /// whole: fewer, larger triangles, within twice the distance of the full extraction's
+    /// surface, with its vertices on the same edges. `None` (the default): every leaf.
+    pub flat_tolerance: Option<f64>,
 }
 
 impl Default for SpsrParams {
@@ -140,6 +146,7 @@ impl Default for SpsrParams {
             full_depth: 5,
             iterations: 8,
             base_iterations: 200,
+            flat_tolerance: None,
         }
     }
 }

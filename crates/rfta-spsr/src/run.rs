@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
+use crate::flat::Leaves;
 use crate::sides::{SIDE_PASSES, SIDE_RESOLVE_SWEEPS, SideSet, Sides};
 use crate::{
     Error, OrientedPoints, Reconstruction, Result, SpsrParams, SpsrReport, TriMesh, extract, glam,
@@ -20,7 +21,7 @@ pub(crate) fn run(
 ) -> Result<Reconstruction> {
     let mut octree = Octree::build(points, params)?;
     let solved = solve_with_sides(&mut octree, params, sides);
-    extract_surface(points, octree, solved)
+    extract_surface(points, params, octree, solved)
 }
 
 /// The first phase's result: the samples (points merged per finest cell, with their density
@@ -246,6 +247,7 @@ fn node_index(levels: &[tree::Level]) -> Vec<crate::keys::SparseIndex> {
 /// out of the cube and the first pass's stayed inside), in world coordinates, with the report.
 fn extract_surface(
     points: &OrientedPoints,
+    params: &SpsrParams,
     octree: Octree,
     solved: Solved,
 ) -> Result<Reconstruction> {
@@ -290,7 +292,11 @@ fn extract_surface(
         Some(lv) if on_first => lv,
         _ => &levels,
     };
-    let mut ex = extract::extract(surface_levels, &values, iso);
+    let leaves = match params.flat_tolerance {
+        Some(t) => Leaves::merged(surface_levels, &values, iso, t / frame.side),
+        None => Leaves::of_tree(surface_levels),
+    };
+    let mut ex = extract::extract(surface_levels, &values, iso, &leaves);
     let finest_cell = frame.side / f64::from(1u32 << (surface_levels.len() - 1));
     if ex.faces.is_empty() || !iso.is_finite() {
         return Err(Error::NoSurface { iso });

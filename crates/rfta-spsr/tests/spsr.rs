@@ -366,6 +366,79 @@ fn a_side_point_beside_the_fine_cells_opens_a_cavity() {
     assert!(Topology::of(&carved.mesh).is_watertight());
 }
 
+/// Flat cells taken whole (`flat_tolerance`): the torus's mesh stays closed with its genus and
+/// loses most of its faces; its vertices are the full extraction's on the same edges (all but
+/// the centres of fans, at most one per cell), every vertex and face centre of either mesh lies
+/// within twice the tolerance (the slab's width) of the other, and the mesh is the same on one
+/// and two threads.
+#[test]
+fn flat_cells_taken_whole_keep_the_surface_within_the_tolerance() {
+    let (p, n, _) = torus(40_000, 21);
+    let points = OrientedPoints::new(p, n, None).expect("cloud");
+    let full = reconstruct(&points, &depth8()).expect("full").mesh;
+    // A tenth of the finest cell (1.1 * 1.7 / 256 = 7.3e-3).
+    let tolerance = 7e-4;
+    let params = SpsrParams {
+        flat_tolerance: Some(tolerance),
+        ..depth8()
+    };
+    let merged = on(2, || reconstruct(&points, &params)).expect("merged");
+    assert_eq!(merged.report.broken_leaves, 0);
+    let merged = merged.mesh;
+    let o = Outcome {
+        mean: 0.0,
+        max: 0.0,
+        topology: Topology::of(&merged),
+        volume: merged.signed_volume(),
+    };
+    check_closed(&o, 1, "merged torus");
+    eprintln!("faces {} -> {}", full.faces.len(), merged.faces.len());
+    assert!(
+        2 * merged.faces.len() < full.faces.len(),
+        "{} faces against {}",
+        merged.faces.len(),
+        full.faces.len()
+    );
+    let bits = |v: &DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    let on_full: std::collections::HashSet<[u64; 3]> = full.vertices.iter().map(bits).collect();
+    let shared = merged
+        .vertices
+        .iter()
+        .filter(|v| on_full.contains(&bits(v)))
+        .count();
+    assert!(
+        shared * 100 >= merged.vertices.len() * 98,
+        "{shared} of {} vertices on the full mesh's",
+        merged.vertices.len()
+    );
+    for (from, to, what) in [
+        (&merged, &full, "merged to full"),
+        (&full, &merged, "full to merged"),
+    ] {
+        let index = rfta_mesh::MeshIndex::new(to).expect("index");
+        let centroids = from
+            .faces
+            .iter()
+            .map(|f| f.iter().map(|&i| from.vertices[i as usize]).sum::<DVec3>() / 3.0);
+        let worst = from
+            .vertices
+            .iter()
+            .copied()
+            .chain(centroids)
+            .map(|q| index.closest_point(q).distance_squared.sqrt())
+            .fold(0.0, f64::max);
+        assert!(
+            worst <= 2.0 * tolerance,
+            "{what}: {worst} against {tolerance}"
+        );
+    }
+    let one = on(1, || reconstruct(&points, &params))
+        .expect("1 thread")
+        .mesh;
+    assert_eq!(one.faces, merged.faces);
+    assert_eq!(one.vertices, merged.vertices);
+}
+
 /// Runs `f` on a rayon pool of `threads` workers.
 fn on<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
     rayon::ThreadPoolBuilder::new()
