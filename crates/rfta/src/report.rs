@@ -246,7 +246,7 @@ pub struct FinalSolveReport {
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SimplifyReport {
     /// Faces of the repaired mesh, before simplification (the same as the output's when it is
-    /// off).
+    /// off; on fine grids its flat cells already extracted whole, `Params::flat_spacings`).
     #[serde(rename = "faces_unsimplified")]
     pub faces_before: usize,
     /// Faces after it (not serialized: the output's count is the mesh's own).

@@ -40,15 +40,15 @@ pub(crate) fn simplify(
         faces_after: mesh.n_faces(),
         ..SimplifyReport::default()
     };
-    if !params.simplify || mesh.n_faces() == 0 {
+    let h = spacing;
+    let per_axis = plan.unit.to_input_length(1.0) / h;
+    let Some(spacings) = params.simplify_spacings(per_axis) else {
+        return Ok((mesh, report));
+    };
+    if mesh.n_faces() == 0 {
         return Ok((mesh, report));
     }
     let t = Instant::now();
-    let h = spacing;
-    let per_axis = plan.unit.to_input_length(1.0) / h;
-    let spacings = params
-        .simplify_tolerance_set()
-        .unwrap_or_else(|| rfta_simplify::default_tolerance(per_axis));
     let tolerance = spacings * h;
     let index = MeshIndex::new(&mesh)?;
     let judge = SampleJudge::new(plan, &mesh, &index, h, tolerance);
