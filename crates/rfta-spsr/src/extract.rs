@@ -473,8 +473,9 @@ fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64, leaves: &Leaves) 
                         if k.iter().any(|&v| v < 0 || v >= n) {
                             continue;
                         }
-                        // The leaf there: the cell of this depth if it is one (it is then taken
-                        // on its own), else the coarsest cell holding it that is not hidden.
+                        // A cell of this depth there is taken on its own (or its children are);
+                        // else the finest cell holding the place that is in the tree and not
+                        // hidden: a coarser leaf, or a cell taken whole.
                         let mut dd = d;
                         loop {
                             if let Some(i) = levels[dd as usize].cell(k)
