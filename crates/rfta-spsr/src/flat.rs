@@ -4,10 +4,10 @@
 //! The octree is refined where the samples are dense, not where the surface bends, so a flat
 //! stretch of surface comes out in many small triangles that say no more than a few large ones.
 //! A refined cell a few depths above the finest is taken whole when the crossings of every edge
-//! of the leaves below it (the vertices a full extraction would place there) lie in a slab of
-//! half-width `tolerance`, normal to the cell's own gradient. The surface the cell then gives
-//! has its vertices where the full extraction's are on the same edges (`Ctx::bracket` in
-//! `extract.rs`) and stays within the slab, hence within twice the tolerance of the full one.
+//! of the leaves below it (the vertices a full extraction would place there) lie within
+//! `tolerance` of their least-squares plane. The surface the cell then gives has its vertices
+//! where the full extraction's are on the same edges (`Ctx::bracket` in `extract.rs`) and stays
+//! in that slab, as the full one's triangles do, hence within twice the tolerance of them.
 //! The cells taken whole and the leaves left form an octree like any other, which the extraction
 //! cuts crack-free as it does the tree's own.
 
@@ -24,9 +24,9 @@ const WHOLE_DEPTHS: u32 = 3;
 pub(crate) struct Leaves {
     /// Per depth, per cell: refined, and split by the extraction (neither taken whole nor
     /// hidden).
-    pub split: Vec<Vec<bool>>,
+    split: Vec<Vec<bool>>,
     /// Per depth, per cell: inside a cell taken whole.
-    pub hidden: Vec<Vec<bool>>,
+    hidden: Vec<Vec<bool>>,
     /// Whether any refined cell is taken whole.
     pub merged: bool,
 }
