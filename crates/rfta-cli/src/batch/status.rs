@@ -174,15 +174,36 @@ pub(super) fn figures(report: &Path) -> Vec<String> {
         .collect()
 }
 
-/// The rows of a status file (none if it does not exist). A last line without its line break
-/// was cut short by a kill: no record (its row runs again). Any other line that is not a
-/// record rfta writes is an error naming it: a record dropped silently would hide its row
-/// (hostile test E14: a failed row vanished from a merge that exited 0).
+/// The rows of a status file (none if it does not exist, or holds no whole line yet: a shard
+/// that has just created it writes its header under the lock next). It is read under a shared
+/// lock, so no shard's append is half there. A last line without its line break was cut short
+/// by a kill: no record (its row runs again). Any other line that is not a record rfta writes
+/// is an error naming it: a record dropped silently would hide its row (hostile test E14: a
+/// failed row vanished from a merge that exited 0).
 pub(super) fn read_status(path: &Path) -> Result<Vec<StatusRow>> {
-    if !path.exists() {
-        return Ok(Vec::new());
+    let handle = match File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(e).with_context(|| format!("{}: cannot open", path.display())),
+    };
+    // As `StatusFile::locked_append`: a file system without locks is read unlocked.
+    let locked = match handle.lock_shared() {
+        Ok(()) => true,
+        Err(e) if e.kind() == std::io::ErrorKind::Unsupported => false,
+        Err(e) => return Err(e.into()),
+    };
+    let read = (|| -> Result<Option<rfta_io::table::Table>> {
+        if complete_length(&handle)? == 0 {
+            return Ok(None);
+        }
+        Ok(Some(rfta_io::table::read_table(path)?))
+    })();
+    if locked {
+        handle.unlock()?;
     }
-    let table = rfta_io::table::read_table(path)?;
+    let Some(table) = read? else {
+        return Ok(Vec::new());
+    };
     if !["row", "input", "output", "status", "seconds"]
         .iter()
         .all(|c| table.column(c).is_some())
