@@ -129,10 +129,10 @@ pub struct Params {
     /// On samples at least 100 spacings across, the final solve's extraction also takes the
     /// cells whose surface is flat within it (at most the default) whole, so the surface the
     /// collapses start from lies within twice it of the full extraction's
-    /// (`Params::flat_spacings`). `None`: [`rfta_simplify::default_tolerance`], `0.8 h / L` spacings (`h` the spacing, `L`
-    /// the samples' longest extent: 0.04 at N = 20, 0.016 at N = 50) within 0.008 to 0.06, or one
-    /// spacing when [`Params::faces`] is set (a budget of faces may cost accuracy, not what the
-    /// samples resolve).
+    /// (`Params::flat_spacings`). `None`: [`rfta_simplify::default_tolerance`], `0.8 h / L`
+    /// spacings (`h` the spacing, `L` the samples' longest extent: 0.04 at N = 20, 0.016 at
+    /// N = 50) within 0.008 to 0.06, or one spacing when [`Params::faces`] is set (a budget of
+    /// faces may cost accuracy, not what the samples resolve).
     pub simplify_tolerance: Option<f64>,
     /// Simplify to at most this many faces, as far as the samples, the topology and the
     /// tolerance allow (`None`: as far as they allow).
