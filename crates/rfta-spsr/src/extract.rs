@@ -356,7 +356,7 @@ pub(crate) fn extract(
         depth,
         leaves,
     };
-    let cand = cut_leaves(levels, values, iso, leaves);
+    let cand = leaves.cut(levels, values, iso);
 
     // Leaves vary in work (most hold one small loop, a few several): tasks of at most
     // `LEAVES_PER_TASK` keep both threads busy to the end. Each task gathers its leaves' output
@@ -426,81 +426,6 @@ pub(crate) fn extract(
         faces,
         broken_leaves,
     }
-}
-
-/// The leaves to extract, as (depth, cell) sorted and once each: those with a sign change among
-/// their corners, and the coarser leaves that share an edge or a face with them (their boundary
-/// may be cut by the finer leaf's corners).
-fn cut_leaves(levels: &[Level], values: &[Vec<f64>], iso: f64, leaves: &Leaves) -> Vec<(u32, u32)> {
-    let inside = |v: f64| v > iso;
-    let mut cand: Vec<(u32, u32)> = levels
-        .par_iter()
-        .flat_map(|level| {
-            let d = level.depth;
-            let vals = &values[d as usize];
-            (0..level.cells.len())
-                .into_par_iter()
-                .with_min_len(crate::solve::GRAIN)
-                .flat_map_iter(move |ci| {
-                    // The cell and at most the 18 coarser leaves beside its faces and edges.
-                    let mut out = [(0u32, 0u32); 19];
-                    let mut len = 0;
-                    let corners = &level.corners[ci];
-                    let leaf = !leaves.is_split(d, ci as u32) && !leaves.is_hidden(d, ci as u32);
-                    let cut = leaf && {
-                        let first = inside(vals[corners[0] as usize]);
-                        corners.iter().any(|&k| inside(vals[k as usize]) != first)
-                    };
-                    if !cut {
-                        return out.into_iter().take(len);
-                    }
-                    out[len] = (d, ci as u32);
-                    len += 1;
-                    let c = crate::keys::demorton(level.cells[ci]);
-                    let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
-                    let n = 1i64 << d;
-                    for o in 0..27 {
-                        let off = [
-                            (o % 3) as i64 - 1,
-                            ((o / 3) % 3) as i64 - 1,
-                            (o / 9) as i64 - 1,
-                        ];
-                        let nz = off.iter().filter(|&&v| v != 0).count();
-                        if nz == 0 || nz == 3 {
-                            continue;
-                        }
-                        let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
-                        if k.iter().any(|&v| v < 0 || v >= n) {
-                            continue;
-                        }
-                        // A cell of this depth there is taken on its own (or its children are);
-                        // else the finest cell holding the place that is in the tree and not
-                        // hidden: a coarser leaf, or a cell taken whole.
-                        let mut dd = d;
-                        loop {
-                            if let Some(i) = levels[dd as usize].cell(k)
-                                && !leaves.is_hidden(dd, i)
-                            {
-                                if dd < d {
-                                    out[len] = (dd, i);
-                                    len += 1;
-                                }
-                                break;
-                            }
-                            if dd == 0 {
-                                break;
-                            }
-                            dd -= 1;
-                            k = k.map(|v| v >> 1);
-                        }
-                    }
-                    out.into_iter().take(len)
-                })
-        })
-        .collect();
-    cand.par_sort_unstable();
-    cand.dedup();
-    cand
 }
 
 impl Ctx<'_> {

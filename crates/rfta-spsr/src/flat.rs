@@ -1,5 +1,6 @@
-//! Which cells the extraction takes as leaves: the tree's leaves, or, given a tolerance, also the
-//! refined cells whose piece of the surface lies within it of a plane, taken whole.
+//! Which cells the extraction takes as leaves (the tree's leaves, or, given a tolerance, also the
+//! refined cells whose piece of the surface lies within it of a plane, taken whole), and which
+//! of them it cuts.
 //!
 //! The octree is refined where the samples are dense, not where the surface bends, so a flat
 //! stretch of surface comes out in many small triangles that say no more than a few large ones.
@@ -82,6 +83,81 @@ impl Leaves {
     #[inline]
     pub(crate) fn is_split(&self, d: u32, i: u32) -> bool {
         self.split[d as usize][i as usize]
+    }
+
+    /// The leaves to extract, as (depth, cell) sorted and once each: those with a sign change
+    /// among their corners, and the coarser leaves that share an edge or a face with them (their
+    /// boundary may be cut by the finer leaf's corners).
+    pub(crate) fn cut(&self, levels: &[Level], values: &[Vec<f64>], iso: f64) -> Vec<(u32, u32)> {
+        let inside = |v: f64| v > iso;
+        let mut cand: Vec<(u32, u32)> = levels
+            .par_iter()
+            .flat_map(|level| {
+                let d = level.depth;
+                let vals = &values[d as usize];
+                (0..level.cells.len())
+                    .into_par_iter()
+                    .with_min_len(crate::solve::GRAIN)
+                    .flat_map_iter(move |ci| {
+                        // The cell and at most the 18 coarser leaves beside its faces and edges.
+                        let mut out = [(0u32, 0u32); 19];
+                        let mut len = 0;
+                        let corners = &level.corners[ci];
+                        let leaf = !self.is_split(d, ci as u32) && !self.is_hidden(d, ci as u32);
+                        let cut = leaf && {
+                            let first = inside(vals[corners[0] as usize]);
+                            corners.iter().any(|&k| inside(vals[k as usize]) != first)
+                        };
+                        if !cut {
+                            return out.into_iter().take(len);
+                        }
+                        out[len] = (d, ci as u32);
+                        len += 1;
+                        let c = demorton(level.cells[ci]);
+                        let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+                        let n = 1i64 << d;
+                        for o in 0..27 {
+                            let off = [
+                                (o % 3) as i64 - 1,
+                                ((o / 3) % 3) as i64 - 1,
+                                (o / 9) as i64 - 1,
+                            ];
+                            let nz = off.iter().filter(|&&v| v != 0).count();
+                            if nz == 0 || nz == 3 {
+                                continue;
+                            }
+                            let mut k = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
+                            if k.iter().any(|&v| v < 0 || v >= n) {
+                                continue;
+                            }
+                            // A cell of this depth there is taken on its own (or its children are);
+                            // else the finest cell holding the place that is in the tree and not
+                            // hidden: a coarser leaf, or a cell taken whole.
+                            let mut dd = d;
+                            loop {
+                                if let Some(i) = levels[dd as usize].cell(k)
+                                    && !self.is_hidden(dd, i)
+                                {
+                                    if dd < d {
+                                        out[len] = (dd, i);
+                                        len += 1;
+                                    }
+                                    break;
+                                }
+                                if dd == 0 {
+                                    break;
+                                }
+                                dd -= 1;
+                                k = k.map(|v| v >> 1);
+                            }
+                        }
+                        out.into_iter().take(len)
+                    })
+            })
+            .collect();
+        cand.par_sort_unstable();
+        cand.dedup();
+        cand
     }
 
     /// Whether cell `i` of depth `d` lies inside a cell taken whole.
