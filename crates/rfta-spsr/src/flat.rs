@@ -53,7 +53,9 @@ impl Leaves {
             let whole: Vec<bool> = (0..level.cells.len())
                 .into_par_iter()
                 .with_min_len(crate::solve::GRAIN)
-                .map(|i| split[i] && !hidden[i] && flat(levels, values, iso, d, i, tolerance))
+                .map_init(Scratch::default, |scratch, i| {
+                    split[i] && !hidden[i] && flat(levels, values, iso, d, i, tolerance, scratch)
+                })
                 .collect();
             leaves.merged |= whole.iter().any(|&w| w);
             // A child is hidden when its parent is taken whole or hidden itself.
@@ -167,6 +169,13 @@ impl Leaves {
     }
 }
 
+/// What [`flat`] gathers for one cell, kept from cell to cell of a task (no allocation per cell).
+#[derive(Default)]
+struct Scratch {
+    points: Vec<DVec3>,
+    stack: Vec<(u32, u64)>,
+}
+
 /// The eight values at cell `i`'s corners (depth `d`), if every corner is a node.
 fn corner_values(levels: &[Level], values: &[Vec<f64>], d: u32, i: usize) -> Option<[f64; 8]> {
     let corners = &levels[d as usize].corners[i];
@@ -180,7 +189,15 @@ fn corner_values(levels: &[Level], values: &[Vec<f64>], d: u32, i: usize) -> Opt
 
 /// Whether the surface `χ = iso` crosses refined cell `i` of depth `d` and every crossing of an
 /// edge of the leaves below it lies within `tolerance` of the crossings' least-squares plane.
-fn flat(levels: &[Level], values: &[Vec<f64>], iso: f64, d: u32, i: usize, tolerance: f64) -> bool {
+fn flat(
+    levels: &[Level],
+    values: &[Vec<f64>],
+    iso: f64,
+    d: u32,
+    i: usize,
+    tolerance: f64,
+    scratch: &mut Scratch,
+) -> bool {
     let Some(f) = corner_values(levels, values, d, i) else {
         return false;
     };
@@ -188,8 +205,10 @@ fn flat(levels: &[Level], values: &[Vec<f64>], iso: f64, d: u32, i: usize, toler
     if f.iter().all(|&v| inside(v) == inside(f[0])) {
         return false;
     }
-    let mut points = Vec::with_capacity(64);
-    let mut stack = vec![(d, levels[d as usize].cells[i])];
+    let Scratch { points, stack } = scratch;
+    points.clear();
+    stack.clear();
+    stack.push((d, levels[d as usize].cells[i]));
     while let Some((dd, key)) = stack.pop() {
         let level = &levels[dd as usize];
         let Ok(j) = level.cells.binary_search(&key) else {
@@ -218,11 +237,11 @@ fn flat(levels: &[Level], values: &[Vec<f64>], iso: f64, d: u32, i: usize, toler
             }
         }
     }
-    let Some(n) = plane_normal(&points) else {
+    let Some(n) = plane_normal(points) else {
         return false;
     };
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for p in &points {
+    for p in points.iter() {
         let h = n.dot(*p);
         lo = lo.min(h);
         hi = hi.max(h);
