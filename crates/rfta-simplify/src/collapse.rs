@@ -18,6 +18,14 @@ const MIN_TURN_COS: f64 = 0.5;
 /// for an equilateral triangle), or than the thinnest face it replaces when that is thinner.
 const MIN_QUALITY: f64 = 0.1;
 
+/// An edge is not queued when its collapse would leave the new vertex farther from the planes
+/// of the faces it merges than this many tolerances (as the quadric's weighted root mean square
+/// distance): such a collapse almost always fails the tolerance test, whose points lie on those
+/// faces, and trying it costs what a collapse that passes does. On the 129^3 bunny, of the
+/// 26,189 collapses tried beyond two tolerances 25 passed; of the 117,610 within one, 92%
+/// (docs/speed.md).
+const HOPELESS: f64 = 2.0;
+
 /// An edge in the queue: its vertices and their edit counts when it was priced (a stale entry
 /// is skipped). The target is priced again when the edge is taken: a small entry keeps the
 /// queue, which holds several stale entries per edge, in cache.
@@ -47,13 +55,13 @@ impl Entry {
 pub(crate) fn run(
     mesh: &mut Editable,
     deviation: &mut Deviation<'_>,
+    tolerance: f64,
     max_faces: usize,
     judge: &dyn Judge,
 ) -> usize {
-    let mut queue = Queue::new(mesh);
+    let mut queue = Queue::new(mesh, tolerance);
     let mut taken_by = vec![u32::MAX; mesh.positions.len()];
     let mut around = Vec::new();
-    let mut edges = Vec::new();
     let mut tries: Vec<Try> = (0..BATCH).map(|_| Try::default()).collect();
     let mut collapses = 0;
     let mut round = 0u32;
@@ -67,7 +75,6 @@ pub(crate) fn run(
             .par_iter_mut()
             .zip(&batch)
             .for_each(|(t, e)| t.run(mesh, deviation, judge, &queue, e));
-        edges.clear();
         for (e, t) in batch.iter().zip(&tries) {
             if !t.passed {
                 continue;
@@ -83,12 +90,8 @@ pub(crate) fn run(
             queue.quadrics[a as usize] = q;
             queue.stamps[a as usize] += 1;
             queue.stamps[b as usize] += 1;
-            mesh.neighbours(a, &mut around);
-            edges.extend(around.iter().map(|&n| (a, n)));
+            queue.push_priced(a, &t.edges);
         }
-        // Later collapses of the batch touch none of these edges' ends (their changes share no
-        // vertex), so these are the prices each edge had right after its collapse.
-        queue.push_all(mesh, &edges);
         queue.drop_stale(mesh);
     }
     collapses
@@ -97,14 +100,19 @@ pub(crate) fn run(
 /// Edges taken together: no two changes share a vertex.
 const BATCH: usize = 64;
 
-/// One collapse tried: its change and hand-over when it passed. A batch's tries are kept from
-/// one batch to the next, so their lists are allocated once.
+/// One collapse tried: its change and hand-over when it passed, and the prices of the edges its
+/// vertex will have. A batch's tries are kept from one batch to the next, so their lists are
+/// allocated once.
 #[derive(Default)]
 struct Try {
     passed: bool,
     change: Change,
     hand_over: HandOver,
     neighbours: [Vec<u32>; 2],
+    /// The kept vertex's neighbours after the collapse, in order, each with the price of its edge
+    /// to it (error, weight); `None` for a locked one.
+    edges: Vec<(u32, Option<(f64, f64)>)>,
+    around: Vec<u32>,
 }
 
 impl Try {
@@ -129,6 +137,39 @@ impl Try {
                     after: &self.change.after,
                 })
         };
+        if self.passed {
+            self.price_edges(mesh, queue, a, b);
+        }
+    }
+
+    /// The edges of `a` once `b` has collapsed into it at the change's target, priced: its
+    /// neighbours are both ends' but themselves (the link condition held), whose positions and
+    /// quadrics no other collapse of the batch changes (their changes share no vertex), so these
+    /// are the prices the edges have right after the collapse.
+    fn price_edges(&mut self, mesh: &Editable, queue: &Queue, a: u32, b: u32) {
+        let [na, nb] = &self.neighbours;
+        let q = queue.quadrics[a as usize].add(&queue.quadrics[b as usize]);
+        let target = self.change.target;
+        let around = &mut self.around;
+        around.clear();
+        around.extend(na.iter().chain(nb).filter(|&&n| n != a && n != b));
+        around.sort_unstable();
+        around.dedup();
+        self.edges.clear();
+        self.edges.extend(around.iter().map(|&n| {
+            // `a` is free (the collapse passed).
+            let price = (!mesh.is_locked(n)).then(|| {
+                let qn = &queue.quadrics[n as usize];
+                let pn = mesh.positions[n as usize];
+                let ((cost, weight), _) = if a < n {
+                    price_of(&q.add(qn), target, pn)
+                } else {
+                    price_of(&qn.add(&q), pn, target)
+                };
+                (cost, weight)
+            });
+            (n, price)
+        }));
     }
 }
 
@@ -139,6 +180,8 @@ struct Queue {
     waiting: Vec<Entry>,
     quadrics: Vec<Quadric>,
     stamps: Vec<u32>,
+    /// The error per unit weight beyond which an edge is not queued ([`HOPELESS`]).
+    hopeless: f64,
 }
 
 impl Queue {
@@ -183,15 +226,15 @@ impl Queue {
         }
         // What waited and was not looked at goes back to the queue.
         for e in waited {
-            let cost = self.price(mesh, e.keep, e.drop).0;
+            let cost = self.price(mesh, e.keep, e.drop).0.0;
             self.queue.push(cost, e);
         }
         batch
     }
 
     /// Each vertex's quadric is the planes of its faces, weighted by their areas; every edge
-    /// between two free vertices is priced.
-    fn new(mesh: &Editable) -> Self {
+    /// between two free vertices is priced, those within [`HOPELESS`] `tolerance`s queued.
+    fn new(mesh: &Editable, tolerance: f64) -> Self {
         let n = mesh.positions.len();
         let quadrics = (0..n as u32)
             .into_par_iter()
@@ -214,6 +257,7 @@ impl Queue {
             waiting: Vec::new(),
             quadrics,
             stamps: vec![0; n],
+            hopeless: (HOPELESS * tolerance).powi(2),
         };
         let edges: Vec<(u32, u32)> = (0..n as u32)
             .into_par_iter()
@@ -232,7 +276,7 @@ impl Queue {
     }
 
     /// Prices the edges `u`-`v` (kept: the lower id) and queues them in their order, but those
-    /// with a locked end. In parallel only for a thousand edges or more: a batch's few hundred
+    /// with a locked end and the hopeless ones ([`HOPELESS`]). In parallel only for a thousand edges or more: a batch's few hundred
     /// cost more to share out than to price (measured on the 129^3 bunny, docs/speed.md).
     fn push_all(&mut self, mesh: &Editable, edges: &[(u32, u32)]) {
         let priced: Vec<Option<(f64, Entry)>> = edges
@@ -248,11 +292,27 @@ impl Queue {
                     drop,
                     stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
                 };
-                Some((self.price(mesh, keep, drop).0, entry))
+                let (cost, weight) = self.price(mesh, keep, drop).0;
+                (cost <= self.hopeless * weight).then_some((cost, entry))
             })
             .collect();
         for (cost, entry) in priced.into_iter().flatten() {
             self.queue.push(cost, entry);
+        }
+    }
+
+    /// Queues the edges of `a` a collapse into it priced ([`Try::price_edges`]), but the locked
+    /// and the hopeless ones.
+    fn push_priced(&mut self, a: u32, edges: &[(u32, Option<(f64, f64)>)]) {
+        for &(n, price) in edges {
+            let Some((cost, weight)) = price else {
+                continue;
+            };
+            if cost <= self.hopeless * weight {
+                let (keep, drop) = (a.min(n), a.max(n));
+                let stamps = [self.stamps[keep as usize], self.stamps[drop as usize]];
+                self.queue.push(cost, Entry { keep, drop, stamps });
+            }
         }
     }
 
@@ -265,24 +325,34 @@ impl Queue {
         }
     }
 
-    /// The error of collapsing `keep` and `drop`, and where the vertex goes.
-    fn price(&self, mesh: &Editable, keep: u32, drop: u32) -> (f64, DVec3) {
+    /// The error of collapsing `keep` and `drop` with its quadric's weight, and where the vertex
+    /// goes.
+    fn price(&self, mesh: &Editable, keep: u32, drop: u32) -> ((f64, f64), DVec3) {
         let q = self.quadrics[keep as usize].add(&self.quadrics[drop as usize]);
-        let (pk, pd) = (mesh.positions[keep as usize], mesh.positions[drop as usize]);
-        let mid = 0.5 * (pk + pd);
-        // The minimizer, unless it lies farther from the edge's midpoint than the edge is long
-        // (a nearly singular quadric's far-off point); else the best of the ends and the midpoint.
-        let target = q
-            .minimizer(mid)
-            .filter(|x| x.distance_squared(mid) <= pk.distance_squared(pd))
-            .unwrap_or_else(|| {
-                [mid, pk, pd]
-                    .into_iter()
-                    .min_by(|x, y| q.error(*x).total_cmp(&q.error(*y)))
-                    .unwrap_or(mid)
-            });
-        (q.error(target), target)
+        price_of(
+            &q,
+            mesh.positions[keep as usize],
+            mesh.positions[drop as usize],
+        )
     }
+}
+
+/// The error of collapsing the edge from `pk` (the kept end) to `pd` whose ends' quadrics sum to
+/// `q`, with `q`'s weight, and where the vertex goes.
+fn price_of(q: &Quadric, pk: DVec3, pd: DVec3) -> ((f64, f64), DVec3) {
+    let mid = 0.5 * (pk + pd);
+    // The minimizer, unless it lies farther from the edge's midpoint than the edge is long (a
+    // nearly singular quadric's far-off point); else the best of the ends and the midpoint.
+    let target = q
+        .minimizer(mid)
+        .filter(|x| x.distance_squared(mid) <= pk.distance_squared(pd))
+        .unwrap_or_else(|| {
+            [mid, pk, pd]
+                .into_iter()
+                .min_by(|x, y| q.error(*x).total_cmp(&q.error(*y)))
+                .unwrap_or(mid)
+        });
+    ((q.error(target), q.weight()), target)
 }
 
 /// Whether every new face keeps its old face's orientation (turns by at most 60 degrees), has
@@ -313,5 +383,26 @@ fn quality(t: &[DVec3; 3]) -> f64 {
         2.0 * 3f64.sqrt() * twice_area / edges
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rfta_geom::shapes;
+
+    /// A cube's every edge joins two corners a side apart: within a side's tenth every collapse
+    /// is hopeless, within ten sides none is.
+    #[test]
+    fn only_hopeless_edges_are_left_out_of_the_queue() {
+        let cube = shapes::cuboid(DVec3::splat(0.5));
+        let mesh = Editable::new(&cube);
+        let edges = 3 * cube.n_faces() / 2;
+        assert_eq!(Queue::new(&mesh, 0.1).queue.len(), 0);
+        assert_eq!(Queue::new(&mesh, 10.0).queue.len(), edges);
+        // A fine ball's edges are short against the tolerance: none is hopeless.
+        let ball = shapes::icosphere(1.0, 4);
+        let mesh = Editable::new(&ball);
+        assert_eq!(Queue::new(&mesh, 0.01).queue.len(), 3 * ball.n_faces() / 2);
     }
 }

@@ -177,6 +177,7 @@ pub fn simplify_indexed(
     let collapses = collapse::run(
         &mut editable,
         &mut deviation,
+        options.tolerance,
         options.max_faces.unwrap_or(0),
         judge,
     );

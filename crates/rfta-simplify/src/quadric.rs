@@ -33,6 +33,12 @@ impl Quadric {
         }
     }
 
+    /// The planes' total weight (`A`'s trace: each plane's `n n^T` has trace 1): the error over
+    /// it is the weighted mean squared distance to the planes.
+    pub(crate) fn weight(&self) -> f64 {
+        self.a[0] + self.a[3] + self.a[5]
+    }
+
     /// The quadric of both.
     pub(crate) fn add(&self, o: &Self) -> Self {
         let mut a = self.a;
@@ -67,7 +73,7 @@ impl Quadric {
     /// when `A` is zero or the solve is not finite.
     pub(crate) fn minimizer(&self, near: DVec3) -> Option<DVec3> {
         let a = &self.a;
-        let trace = a[0] + a[3] + a[5];
+        let trace = self.weight();
         if trace <= 0.0 || !trace.is_finite() {
             return None;
         }
@@ -108,6 +114,13 @@ mod tests {
         let q = Quadric::plane(DVec3::new(0.0, 0.0, 2.0), DVec3::Z, 3.0);
         let e = q.error(DVec3::new(5.0, -1.0, 4.5));
         assert!((e - 3.0 * 2.5 * 2.5).abs() < 1e-12, "{e}");
+    }
+
+    #[test]
+    fn the_weight_is_the_planes_total_whatever_their_normals() {
+        let n = DVec3::new(1.0, -2.0, 0.5).normalize();
+        let q = Quadric::plane(DVec3::ONE, n, 2.5).add(&Quadric::plane(DVec3::ZERO, DVec3::Y, 0.5));
+        assert!((q.weight() - 3.0).abs() < 1e-12, "{}", q.weight());
     }
 
     #[test]
