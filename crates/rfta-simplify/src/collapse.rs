@@ -275,13 +275,11 @@ impl Queue {
         queue
     }
 
-    /// Prices the edges `u`-`v` (kept: the lower id) and queues them in their order, but those
-    /// with a locked end and the hopeless ones ([`HOPELESS`]). In parallel only for a thousand edges or more: a batch's few hundred
-    /// cost more to share out than to price (measured on the 129^3 bunny, docs/speed.md).
+    /// Prices the edges `u`-`v` (kept: the lower id), in parallel, and queues them in their
+    /// order, but those with a locked end and the hopeless ones.
     fn push_all(&mut self, mesh: &Editable, edges: &[(u32, u32)]) {
         let priced: Vec<Option<(f64, Entry)>> = edges
             .par_iter()
-            .with_min_len(1024)
             .map(|&(u, v)| {
                 let (keep, drop) = (u.min(v), u.max(v));
                 if mesh.is_locked(keep) || mesh.is_locked(drop) {
@@ -293,7 +291,7 @@ impl Queue {
                     stamps: [self.stamps[keep as usize], self.stamps[drop as usize]],
                 };
                 let (cost, weight) = self.price(mesh, keep, drop).0;
-                (cost <= self.hopeless * weight).then_some((cost, entry))
+                self.worth_trying(cost, weight).then_some((cost, entry))
             })
             .collect();
         for (cost, entry) in priced.into_iter().flatten() {
@@ -308,12 +306,17 @@ impl Queue {
             let Some((cost, weight)) = price else {
                 continue;
             };
-            if cost <= self.hopeless * weight {
+            if self.worth_trying(cost, weight) {
                 let (keep, drop) = (a.min(n), a.max(n));
                 let stamps = [self.stamps[keep as usize], self.stamps[drop as usize]];
                 self.queue.push(cost, Entry { keep, drop, stamps });
             }
         }
+    }
+
+    /// Whether a collapse of this error and quadric weight is not hopeless ([`HOPELESS`]).
+    fn worth_trying(&self, cost: f64, weight: f64) -> bool {
+        cost <= self.hopeless * weight
     }
 
     /// Drops the stale entries once they are most of the queue (three for each live edge).
