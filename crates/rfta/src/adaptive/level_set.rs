@@ -8,7 +8,9 @@
 //! coarser grid's cubic interpolant ([`rfta_geom::CubicField`]). Levels go on while the next one
 //! fits in the budget. The finest grid is then read as a level set: its zero set's points by
 //! Newton's method, one screened Poisson solve, the repair and the verdict
-//! ([`crate::reconstruct`] with [`Field::LevelSet`]).
+//! ([`crate::reconstruct`] with [`Field::LevelSet`]); pieces a strut thinner than the finest
+//! spacing left apart are joined where the function, asked with what the budget has left, is
+//! inside between them (`bridge.rs`).
 
 use std::time::Instant;
 
@@ -112,6 +114,21 @@ pub(super) fn refine_and_read(
     };
     let points = crate::field::zero_set_points(&samples, Some(&known));
     let mut reconstruction = crate::run(&samples, &read, Some(&points), progress, asker.cancel)?;
+    // Pieces a strut thinner than the finest spacing left apart, joined where the function is
+    // inside between them, with what the budget has left.
+    let left = budget.saturating_sub(asked.len());
+    let mut ask = |p: &[DVec3]| {
+        let values = asker.values(p)?;
+        asked.extend(p.iter().copied().zip(values.iter().copied()));
+        Ok(values)
+    };
+    let (_, joined) = super::bridge::join_where_inside(
+        &mut reconstruction.mesh,
+        report.finest_spacing,
+        left,
+        &mut ask,
+    )?;
+    reconstruction.report.repair.components_joined += joined;
     let (positions, asked_values): (Vec<DVec3>, Vec<f64>) = asked.into_iter().unzip();
     let asked =
         SdfSamples::scattered(positions, asked_values)?.with_spacing(report.finest_spacing)?;

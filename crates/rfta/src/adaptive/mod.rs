@@ -29,6 +29,7 @@
 //! deterministic oracle gives the same samples and the same mesh on any number of threads.
 //! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
 
+mod bridge;
 mod lattice;
 mod level_set;
 mod settle;
