@@ -76,7 +76,8 @@ except (OSError, StopIteration):
 print(json.dumps({"wall": wall, "cpu": cpu, "rss_mb": rss}))
 "#;
 
-/// Runs one method in a child process; `(wall, cpu, peak MB)`.
+/// Runs one method in a child process; `(wall, cpu, peak MB, steal share, seconds simplifying)`
+/// (the last NaN but for rfta).
 pub(super) fn child(
     exe: &Path,
     python: Option<&Python>,
@@ -84,7 +85,7 @@ pub(super) fn child(
     threads: usize,
     input: &Input,
     mesh: &Path,
-) -> Result<(f64, f64, f64, f64)> {
+) -> Result<(f64, f64, f64, f64, f64)> {
     let peer = matches!(method, "gpytoolbox" | "skimage");
     let mut cmd = if peer {
         let python = python.context("no Python with the peers")?;
@@ -129,7 +130,13 @@ pub(super) fn child(
     let line = stdout.lines().last().unwrap_or_default();
     let v: serde_json::Value = serde_json::from_str(line.trim()).context("child output")?;
     let get = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-    Ok((get("wall"), get("cpu"), get("rss_mb"), get("steal")))
+    Ok((
+        get("wall"),
+        get("cpu"),
+        get("rss_mb"),
+        get("steal"),
+        get("simplified"),
+    ))
 }
 
 /// The share of the machine's CPU time (all cores over `wall` seconds) that the hypervisor
@@ -171,10 +178,11 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
         crate::usage::steal_seconds(),
     );
     let t = Instant::now();
-    let mesh: TriMesh = match method.as_str() {
+    // The mesh, and for rfta the seconds its simplification step took (issue 59's share).
+    let (mesh, simplified): (TriMesh, Option<f64>) = match method.as_str() {
         "mc" => {
             let grid = samples.as_grid().context("marching cubes needs a grid")?;
-            rfta_mc::marching_cubes(grid, samples.values(), 0.0)
+            (rfta_mc::marching_cubes(grid, samples.values(), 0.0), None)
         }
         m if m.starts_with("rfta") => {
             let base =
@@ -183,7 +191,12 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
                 threads: Some(threads),
                 ..base
             };
-            rfta::reconstruct(&samples, &params)?.mesh
+            let r = rfta::reconstruct(&samples, &params)?;
+            let simplified = (r.report.timings.iter())
+                .filter(|(step, _)| *step == rfta::Step::Simplify)
+                .map(|(_, d)| d.as_secs_f64())
+                .sum();
+            (r.mesh, Some(simplified))
         }
         other => bail!("unknown method {other}"),
     };
@@ -191,8 +204,9 @@ pub(crate) fn child_main(args: &[String]) -> Result<()> {
     let (cpu, rss_mb) = crate::usage::process_usage();
     let steal = steal_share(steal0, wall);
     rfta_io::write_mesh(Path::new(mesh_out), &mesh)?;
+    let simplified = simplified.map_or(String::new(), |x| format!(", \"simplified\": {x}"));
     println!(
-        "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}}}",
+        "{{\"wall\": {wall}, \"cpu\": {}, \"rss_mb\": {rss_mb}, \"steal\": {steal}{simplified}}}",
         cpu - cpu0
     );
     Ok(())

@@ -31,7 +31,9 @@
 //! resident memory of the child. The parent scores every mesh against `gt.obj` (the paper's
 //! Chamfer, 2 x 10^5 samples per side) and writes `e2e.md` and `e2e.csv` to `--out`
 //! (`target/bench`), with the ratios of gpytoolbox's CPU time to ours and of our wall time to
-//! each marching cubes', and the speed issue's targets (`TARGETS`) beside what was measured.
+//! each marching cubes', the speed issue's targets (`TARGETS`) beside what was measured, and the
+//! simplification step's share of the default preset's wall time (issue 59, `SIMPLIFY_SHARE`:
+//! the report's timing of the step, summed over the shapes).
 
 mod child;
 mod report;
@@ -72,6 +74,9 @@ const TARGETS: [(usize, f64, Option<f64>); 4] = [
     (256, 20.0, Some(2000.0)),
 ];
 
+/// The simplification issue's target: the step's share of the default preset's wall time.
+const SIMPLIFY_SHARE: f64 = 0.10;
+
 /// One input grid.
 struct Input {
     shape: String,
@@ -105,6 +110,8 @@ struct Run {
     steals: Vec<f64>,
     /// Hash of the mesh file the run wrote.
     hash: u64,
+    /// Seconds of the run in rfta's simplification step (NaN for the other methods).
+    simplified: f64,
 }
 
 /// `cargo xtask bench e2e`'s arguments.
@@ -212,7 +219,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
     }
     let exe = std::env::current_exe()?;
     let mut csv = String::from(
-        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status,walls_s,steals\n",
+        "shape,n,method,threads,wall_s,cpu_s,peak_mb,chamfer,faces,watertight,status,walls_s,steals,simplified_s\n",
     );
     let mut rows: Vec<(String, usize, String, usize, Result<Run>)> = Vec::new();
     for input in &inputs {
@@ -253,7 +260,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                 input.shape, input.n
             ));
             let r = child(&exe, python.as_ref(), method, threads, input, &mesh_path).and_then(
-                |(wall, cpu, rss_mb, steal)| {
+                |(wall, cpu, rss_mb, steal, simplified)| {
                     if method == "ceiling" {
                         return Ok(Run {
                             wall,
@@ -265,6 +272,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                             walls: vec![wall],
                             steals: vec![steal],
                             hash: 0,
+                            simplified,
                         });
                     }
                     let bytes = std::fs::read(&mesh_path)?;
@@ -307,6 +315,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                         walls: vec![wall],
                         steals: vec![steal],
                         hash,
+                        simplified,
                     })
                 },
             );
@@ -335,7 +344,7 @@ pub(crate) fn run(a: &Args) -> Result<()> {
             match &r {
                 Ok(r) => writeln!(
                     csv,
-                    "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok,{},{}",
+                    "{},{},{method},{threads},{:.6},{:.3},{:.0},{:.6},{},{},ok,{},{},{:.6}",
                     input.shape,
                     input.n,
                     r.wall,
@@ -353,7 +362,8 @@ pub(crate) fn run(a: &Args) -> Result<()> {
                         .iter()
                         .map(|w| format!("{w:.4}"))
                         .collect::<Vec<_>>()
-                        .join(";")
+                        .join(";"),
+                    r.simplified
                 )?,
                 Err(e) => writeln!(
                     csv,

@@ -19,7 +19,11 @@ pub(super) fn read_csv(
         if f.len() < 11 {
             bail!("{}: short row '{line}'", path.display());
         }
-        let num = |i: usize| f[i].parse::<f64>().unwrap_or(f64::NAN);
+        let num = |i: usize| {
+            f.get(i)
+                .and_then(|x| x.parse::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
         let (shape, n) = (f[0].to_string(), f[1].parse::<usize>()?);
         if !inputs.contains(&(shape.clone(), n)) {
             inputs.push((shape.clone(), n));
@@ -41,6 +45,7 @@ pub(super) fn read_csv(
                     .map(|w| w.split(';').filter_map(|v| v.parse().ok()).collect())
                     .unwrap_or_default(),
                 hash: 0,
+                simplified: num(13),
             })
         } else {
             Err(anyhow::anyhow!("{}", f[10]))
@@ -184,6 +189,7 @@ pub(super) fn report(
         }
     }
     targets(&mut s, rows, &ns)?;
+    simplification_share(&mut s, rows, &ns)?;
     writeln!(
         s,
         "| shape | N | method | threads | wall s | CPU s | peak MB | Chamfer | faces | watertight |"
@@ -260,6 +266,56 @@ fn targets(
         "| N | shapes | wall s | target s | peak MB | target MB | |"
     )?;
     writeln!(s, "|{}", "---|".repeat(7))?;
+    for l in lines {
+        writeln!(s, "{l}")?;
+    }
+    writeln!(s)?;
+    Ok(())
+}
+
+/// The simplification issue's time target (issue 59: the step at most [`SIMPLIFY_SHARE`] of the
+/// run) beside the default preset's runs on 2 threads at each N this run has: the step's seconds
+/// over the runs' wall seconds, summed over the shapes.
+fn simplification_share(
+    s: &mut String,
+    rows: &[(String, usize, String, usize, Result<Run>)],
+    ns: &[usize],
+) -> Result<()> {
+    let mut lines = Vec::new();
+    for &n in ns {
+        let runs: Vec<&Run> = rows
+            .iter()
+            .filter(|(_, nn, m, t, _)| *nn == n && m == "rfta-default" && *t == 2)
+            .filter_map(|(_, _, _, _, r)| r.as_ref().ok())
+            .filter(|r| r.simplified.is_finite())
+            .collect();
+        if runs.is_empty() {
+            continue;
+        }
+        let step = runs.iter().map(|r| r.simplified).sum::<f64>();
+        let wall = runs.iter().map(|r| r.wall).sum::<f64>();
+        let share = step / wall;
+        lines.push(format!(
+            "| {n} | {} | {step:.2} | {wall:.2} | {:.1}% | {} |",
+            runs.len(),
+            100.0 * share,
+            if share <= SIMPLIFY_SHARE {
+                "met"
+            } else {
+                "**not met**"
+            },
+        ));
+    }
+    if lines.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        s,
+        "The simplification's share of the default preset's wall time on 2 threads (issue 59's target: at most {:.0}%):\n",
+        100.0 * SIMPLIFY_SHARE
+    )?;
+    writeln!(s, "| N | shapes | step s | wall s | share | |")?;
+    writeln!(s, "|{}", "---|".repeat(6))?;
     for l in lines {
         writeln!(s, "{l}")?;
     }
