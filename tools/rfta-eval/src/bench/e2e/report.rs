@@ -442,7 +442,37 @@ mod tests {
             walls: walls.to_vec(),
             steals: steals.to_vec(),
             hash: 0,
+            simplified: f64::NAN,
         })
+    }
+
+    #[test]
+    fn the_share_table_sums_the_step_over_the_shapes() {
+        let row = |n, method: &str, threads, wall: f64, simplified: f64| {
+            let mut r = run(&[wall], &[0.0]).expect("a run");
+            r.simplified = simplified;
+            ("a".to_string(), n, method.to_string(), threads, Ok(r))
+        };
+        let rows = vec![
+            // N = 20: (0.1 + 0.3) / (2 + 3) = 8%.
+            row(20, "rfta-default", 2, 2.0, 0.1),
+            row(20, "rfta-default", 2, 3.0, 0.3),
+            // Neither the 1-thread run nor marching cubes (no step) counts.
+            row(20, "rfta-default", 1, 1.0, 0.9),
+            row(20, "mc", 1, 1.0, f64::NAN),
+            // 129^3: 3 of 20 s, 15%.
+            row(128, "rfta-default", 2, 20.0, 3.0),
+        ];
+        let mut s = String::new();
+        simplification_share(&mut s, &rows, &[20, 128]).expect("written");
+        assert!(s.contains("| 20 | 2 | 0.40 | 5.00 | 8.0% | met |"), "{s}");
+        assert!(
+            s.contains("| 128 | 1 | 3.00 | 20.00 | 15.0% | **not met** |"),
+            "{s}"
+        );
+        let mut none = String::new();
+        simplification_share(&mut none, &rows, &[50]).expect("written");
+        assert!(none.is_empty());
     }
 
     #[test]
