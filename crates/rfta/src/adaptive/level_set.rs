@@ -114,21 +114,13 @@ pub(super) fn refine_and_read(
     };
     let points = crate::field::zero_set_points(&samples, Some(&known));
     let mut reconstruction = crate::run(&samples, &read, Some(&points), progress, asker.cancel)?;
-    // Pieces a strut thinner than the finest spacing left apart, joined where the function is
-    // inside between them, with what the budget has left.
-    let left = budget.saturating_sub(asked.len());
-    let mut ask = |p: &[DVec3]| {
-        let values = asker.values(p)?;
-        asked.extend(p.iter().copied().zip(values.iter().copied()));
-        Ok(values)
-    };
-    let (_, joined) = super::bridge::join_where_inside(
-        &mut reconstruction.mesh,
+    join_pieces(
+        &mut reconstruction,
+        asker,
+        &mut asked,
+        budget,
         report.finest_spacing,
-        left,
-        &mut ask,
     )?;
-    reconstruction.report.repair.components_joined += joined;
     let (positions, asked_values): (Vec<DVec3>, Vec<f64>) = asked.into_iter().unzip();
     let asked =
         SdfSamples::scattered(positions, asked_values)?.with_spacing(report.finest_spacing)?;
@@ -152,6 +144,28 @@ pub(super) fn refine_and_read(
         samples: asked,
         report,
     })
+}
+
+/// Pieces a strut thinner than the finest spacing `h` left apart, joined where the function is
+/// inside between them (`bridge.rs`), asked with what `budget` has left after `asked`, to which
+/// the answers are added.
+fn join_pieces(
+    reconstruction: &mut crate::Reconstruction,
+    asker: &mut Asker<'_>,
+    asked: &mut Vec<(DVec3, f64)>,
+    budget: usize,
+    h: f64,
+) -> Result<()> {
+    let left = budget.saturating_sub(asked.len());
+    let mut ask = |p: &[DVec3]| {
+        let values = asker.values(p)?;
+        asked.extend(p.iter().copied().zip(values.iter().copied()));
+        Ok(values)
+    };
+    let mesh = &mut reconstruction.mesh;
+    let (_, joined) = super::bridge::join_where_inside(mesh, h, left, &mut ask)?;
+    reconstruction.report.repair.components_joined += joined;
+    Ok(())
 }
 
 /// The reconstruction's agreement measured against the samples asked for, not the finest grid's
