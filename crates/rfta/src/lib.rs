@@ -236,11 +236,7 @@ pub(crate) fn run(
         let (cloud, rounds) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
         go_on()?;
         let (mesh, mut final_solve) = finish::final_solve(&plan, &cloud, &mut journal, progress)?;
-        let (mut mesh, repair) =
-            finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
-        if plan.field.read_as == Reading::LevelSet {
-            field::vertices_onto_zero_set(&mut mesh, &plan.samples);
-        }
+        let (mesh, repair) = finish::repair(&plan, &cloud, mesh, &mut final_solve, &mut journal)?;
         let spacing = plan.samples.spacing();
         let (mesh, simplify) = finish::simplify(&plan, mesh, spacing, &mut journal)?;
         let report = Report {
