@@ -7,7 +7,7 @@
 
 use rfta_geom::TriMesh;
 use rfta_geom::glam::DVec3;
-use rfta_mesh::{MeshIndex, face_components, signed_volume};
+use rfta_mesh::{MeshIndex, UnionFind, face_components, signed_volume};
 
 use crate::Result;
 
@@ -43,9 +43,12 @@ pub(super) fn join_where_inside(
         .iter()
         .zip(&outward)
         .map(|(p, &out)| {
+            if !out {
+                return None;
+            }
             let part = mesh.part(p);
             let index = MeshIndex::new(&part).ok()?;
-            out.then_some((part, index))
+            Some((part, index))
         })
         .collect();
     // The nearest points of each pair within reach: (distance, i, j, face of i, face of j, the
@@ -88,25 +91,21 @@ pub(super) fn join_where_inside(
         return Ok((0, 0));
     }
     let values = ask(&points)?;
-    let mut set: Vec<usize> = (0..parts.len()).collect();
-    let root = |set: &mut Vec<usize>, mut x: usize| {
-        while set[x] != x {
-            set[x] = set[set[x]];
-            x = set[x];
-        }
-        x
-    };
+    let mut joined_to = UnionFind::new(parts.len());
     let mut replaced = vec![false; mesh.faces.len()];
     let mut joined = 0;
     for (gap, run) in gaps.iter().zip(runs) {
         let &(_, i, j, fa, fb, _, _) = gap;
-        let (ri, rj) = (root(&mut set, i), root(&mut set, j));
         let inside = values[run].iter().all(|&v| v < 0.0);
-        if ri == rj || !inside || replaced[fa as usize] || replaced[fb as usize] {
+        if joined_to.find(i) == joined_to.find(j)
+            || !inside
+            || replaced[fa as usize]
+            || replaced[fb as usize]
+        {
             continue;
         }
         if rfta_mesh::join(mesh, fa, fb) {
-            set[ri] = rj;
+            joined_to.union(i, j);
             replaced[fa as usize] = true;
             replaced[fb as usize] = true;
             joined += 1;

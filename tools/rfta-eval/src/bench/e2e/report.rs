@@ -227,6 +227,14 @@ fn ratio(x: f64) -> String {
     }
 }
 
+/// The default preset's finished runs on 2 threads at `n`: what both target tables read.
+fn default_runs(rows: &[(String, usize, String, usize, Result<Run>)], n: usize) -> Vec<&Run> {
+    rows.iter()
+        .filter(|(_, nn, m, t, _)| *nn == n && m == "rfta-default" && *t == 2)
+        .filter_map(|(_, _, _, _, r)| r.as_ref().ok())
+        .collect()
+}
+
 /// The speed issue's targets ([`TARGETS`]) beside the default preset's runs on 2 threads at each N
 /// this run has: mean wall time per shape and the largest peak memory, and whether both are met.
 fn targets(
@@ -236,11 +244,7 @@ fn targets(
 ) -> Result<()> {
     let mut lines = Vec::new();
     for &(n, wall_target, mb_target) in &TARGETS {
-        let runs: Vec<&Run> = rows
-            .iter()
-            .filter(|(_, nn, m, t, _)| *nn == n && m == "rfta-default" && *t == 2)
-            .filter_map(|(_, _, _, _, r)| r.as_ref().ok())
-            .collect();
+        let runs = default_runs(rows, n);
         if !ns.contains(&n) || runs.is_empty() {
             continue;
         }
@@ -283,10 +287,8 @@ fn simplification_share(
 ) -> Result<()> {
     let mut lines = Vec::new();
     for &n in ns {
-        let runs: Vec<&Run> = rows
-            .iter()
-            .filter(|(_, nn, m, t, _)| *nn == n && m == "rfta-default" && *t == 2)
-            .filter_map(|(_, _, _, _, r)| r.as_ref().ok())
+        let runs: Vec<&Run> = default_runs(rows, n)
+            .into_iter()
             .filter(|r| r.simplified.is_finite())
             .collect();
         if runs.is_empty() {
