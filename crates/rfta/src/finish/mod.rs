@@ -316,6 +316,11 @@ fn repair_once(
         .filter(|&i| unit.spheres[i as usize].radius < r_own)
         .collect();
     let near = SphereTree::with_indices(&unit.spheres, &near);
+    // A level set's surface onto its interpolant's zero set, before the dents (which then dent
+    // past any sample the move left on the wrong side).
+    if plan.field.read_as == crate::Reading::LevelSet {
+        crate::field::vertices_onto_zero_set(&mut mesh, samples);
+    }
     // Dents before clearing the spheres (which can then clear what a dent's faces enter) and
     // after it (for the samples a move out of a sphere left on the wrong side).
     report.dents = dent_wrong_side(&mut mesh, samples, h, consistency::SIGN_MARGIN);
