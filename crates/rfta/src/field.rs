@@ -277,7 +277,9 @@ pub(crate) fn measure(samples: &SdfSamples, field: Field, clamp: Option<f64>) ->
 /// Of the spheres that own points (radius below `owner_radius`, every k-th of them, about
 /// `COVER_TESTS`), each starts on the side its value's gradient points to the zero
 /// set and is moved by the paper's local search (`params`, as the initial points') against every
-/// sphere smaller than `reach_radius`; those that end inside another are covered.
+/// sphere smaller than `reach_radius`; those that end inside another are covered. With `asked`,
+/// only the spheres of the samples it marks (an adaptive run's dense grid, whose other values are
+/// interpolated and bound nothing).
 pub(crate) fn cover_check(
     report: &mut FieldReport,
     field: Field,
@@ -285,6 +287,7 @@ pub(crate) fn cover_check(
     unit: &UnitBox,
     (owner_radius, reach_radius): (f64, f64),
     params: &rfta_feasible::Params,
+    asked: Option<&[bool]>,
 ) {
     let Some(grid) = samples.as_grid() else {
         return;
@@ -294,17 +297,18 @@ pub(crate) fn cover_check(
     }
     let values = samples.values();
     let spheres = &unit.spheres;
+    let asked = |i: u32| asked.is_none_or(|a| a[i as usize]);
     let owners: Vec<u32> = (0..spheres.len() as u32)
         .filter(|&i| {
             let r = spheres[i as usize].radius;
-            r > 0.0 && r < owner_radius
+            r > 0.0 && r < owner_radius && asked(i)
         })
         .collect();
     if owners.len() < MIN_FAR {
         return;
     }
     let near: Vec<u32> = (0..spheres.len() as u32)
-        .filter(|&i| spheres[i as usize].radius < reach_radius)
+        .filter(|&i| spheres[i as usize].radius < reach_radius && asked(i))
         .collect();
     let tree = SphereTree::with_indices(spheres, &near);
     let params = &rfta_feasible::Params {

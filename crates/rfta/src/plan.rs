@@ -130,7 +130,15 @@ impl<'a> Plan<'a> {
         let t = std::time::Instant::now();
         let mut field = field::measure(&samples, params.field, input.clamp);
         let radii = (owner_radius, raster_radius);
-        field::cover_check(&mut field, params.field, &samples, &unit, radii, &feasible);
+        field::cover_check(
+            &mut field,
+            params.field,
+            &samples,
+            &unit,
+            radii,
+            &feasible,
+            None,
+        );
         journal.timed(Step::Field, t);
         if !field.read_as.fine_tunes() {
             params.rounds = 0;

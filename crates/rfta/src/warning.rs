@@ -31,6 +31,14 @@ pub enum Warning {
         /// [`crate::FieldReport::covered`].
         covered: f64,
     },
+    /// A function asked adaptively whose spheres are bounds (`covered` of those near its zero set
+    /// lie inside the union of others) and whose mesh read as distances entered more of them
+    /// than its zero set does: the mesh is the zero set of the samples asked
+    /// (`crates/rfta/src/adaptive/bounds.rs`).
+    BoundFunction {
+        /// [`crate::FieldReport::covered`].
+        covered: f64,
+    },
     /// Flat plateaus of the values at magnitude `at` (`samples` on them): a clamp, detected.
     Clamped {
         /// The clamp.
@@ -135,6 +143,11 @@ impl fmt::Display for Warning {
             Self::Bound { covered } => write!(
                 f,
                 "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; read as bounds: every sphere stays empty space, but the tangency points off the zero set of the grid's smooth interpolant were moved onto it by Newton's method and the spheres were not fitted (field = distance reads them as distances)",
+                100.0 * covered
+            ),
+            Self::BoundFunction { covered } => write!(
+                f,
+                "the function's values are not distances: {:.1}% of the spheres near its zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give, and read as distances the mesh entered more of the spheres than the function's zero set does; the mesh is that zero set (the samples asked carried onto a grid at the finest spacing reached, points put on it by Newton's method on the grid's smooth interpolant; field = distance reads them as distances)",
                 100.0 * covered
             ),
             Self::Clamped { at, samples } => write!(

@@ -170,7 +170,10 @@ fn join_pieces(
 
 /// The reconstruction's agreement measured against the samples asked for, not the finest grid's
 /// interpolated values: its sign errors and the warning about them.
-fn agree_with_asked(reconstruction: &mut crate::Reconstruction, asked: &SdfSamples) -> Result<()> {
+pub(super) fn agree_with_asked(
+    reconstruction: &mut crate::Reconstruction,
+    asked: &SdfSamples,
+) -> Result<()> {
     let mesh = &reconstruction.mesh;
     let topology = rfta_mesh::Topology::of(mesh);
     let c = crate::consistency::measure_with(asked, mesh, &topology, None)?;
@@ -194,7 +197,7 @@ fn agree_with_asked(reconstruction: &mut crate::Reconstruction, asked: &SdfSampl
 
 /// The values of `fine` (`grid` halved) before any is asked: the asked ones of `grid` (`known`)
 /// where its points are, its cubic interpolant elsewhere; and which of them were asked.
-fn carried(
+pub(super) fn carried(
     grid: &Grid,
     values: &[f64],
     known: &[bool],
@@ -221,7 +224,7 @@ fn carried(
 }
 
 /// `grid` with its spacing halved over the same box.
-fn finer(grid: &Grid) -> Result<Grid> {
+pub(super) fn finer(grid: &Grid) -> Result<Grid> {
     Ok(Grid::new(
         grid.dims().map(|d| 2 * d - 1),
         grid.origin(),

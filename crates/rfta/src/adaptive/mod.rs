@@ -29,6 +29,7 @@
 //! deterministic oracle gives the same samples and the same mesh on any number of threads.
 //! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
 
+mod bounds;
 mod bridge;
 mod lattice;
 mod level_set;
@@ -205,10 +206,7 @@ pub fn reconstruct_adaptive(
             spend = usable - lattice.len();
         }
         if spend < MIN_BUDGET / 5 {
-            let left = budget.evaluations - lattice.len();
-            return final_pass(
-                lattice, &mut asker, left, params, seeds, report, progress, on_pass,
-            );
+            break;
         }
         let t = Instant::now();
         let oracle_before = asker.seconds;
@@ -226,13 +224,16 @@ pub fn reconstruct_adaptive(
         report.passes.push(pass);
         if done {
             // Nothing left undecided, or nothing left to refine.
-            let left = budget.evaluations - lattice.len();
-            return final_pass(
-                lattice, &mut asker, left, params, seeds, report, progress, on_pass,
-            );
+            break;
         }
         seeds = Some(points);
     }
+    let left = budget.evaluations - lattice.len();
+    let read = final_pass(
+        &lattice, &mut asker, left, params, seeds, report, progress, on_pass,
+    )?;
+    // A function whose spheres are bounds is read again on a dense grid (`bounds.rs`).
+    bounds::read_again_if_bounds(read, &lattice, &mut asker, params, progress)
 }
 
 /// [`Error::InvalidParams`] for invalid `params`, a box that is not finite with positive extent,
@@ -291,7 +292,7 @@ pub(crate) const HANDLE_SHARE: f64 = 0.01;
 /// settled by asking the function at most `left` times (`settle.rs`).
 #[allow(clippy::too_many_arguments)]
 fn final_pass(
-    lattice: Lattice,
+    lattice: &Lattice,
     asker: &mut Asker<'_>,
     left: usize,
     params: &Params,
@@ -310,7 +311,7 @@ fn final_pass(
     let small = lattice.base_spacing();
     let cancel = asker.cancel;
     let params = Params {
-        spsr_depth: params.spsr_depth.or(Some(final_depth(&lattice))),
+        spsr_depth: params.spsr_depth.or(Some(final_depth(lattice))),
         ..params.clone()
     };
     let go_on = || crate::go_on(cancel);

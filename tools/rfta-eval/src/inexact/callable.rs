@@ -1,5 +1,7 @@
-//! The networks as functions to ask: rfta's adaptive mode against MISE (when a venv with it is
-//! given), at MISE's evaluations (30,000 without MISE), scored against the network's zero set.
+//! The fields as functions to ask: rfta's adaptive mode against MISE on the networks (when a
+//! venv with it is given), at MISE's evaluations (30,000 without MISE), and against marching
+//! cubes on a grid of about as many points on the CSG trees (MISE's runner asks networks only),
+//! scored against the field's zero set.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -42,6 +44,21 @@ pub(super) fn compare(
     let reference = MeshSummary::of(reference);
     let mut rows = Vec::new();
     let mut budget = BUDGET;
+    if field.path.is_none() {
+        // Marching cubes on the grid of about as many points (31^3 for 30,000).
+        let n = (BUDGET as f64).cbrt().floor() as usize - 1;
+        let (grid, values) = field.grid(n)?;
+        let mesh = rfta_mc::marching_cubes(&grid, &values, 0.0);
+        rows.push(CallableRow {
+            field: field.name.clone(),
+            method: "mc",
+            evaluations: grid.len(),
+            seconds: 0.0,
+            chamfer: score(&mesh)?,
+            summary: MeshSummary::of(&mesh),
+            reference,
+        });
+    }
     if let (Some(mise), Some(path)) = (mise, &field.path) {
         let run = mise.run_network(path, &out.join(format!("{}-mise.obj", field.name)))?;
         budget = run.evaluations;
@@ -94,7 +111,7 @@ pub(super) fn markdown(rows: &[CallableRow], mise: bool) -> String {
     }
     let _ = writeln!(
         s,
-        "\n## The networks as functions to ask\n\n{} rfta's adaptive mode (default parameters) at {}. Seconds: outside the function (the network's own time excluded).\n\n| field | method | evaluations | Chamfer | pieces | genus (reference) | seconds |\n|---|---|---|---|---|---|---|",
+        "\n## The fields as functions to ask\n\n{} rfta's adaptive mode (default parameters) at {}; the CSG trees beside marching cubes on the grid of about as many points (31^3), rfta at 30,000 evaluations. Seconds: outside the function (the network's own time excluded).\n\n| field | method | evaluations | Chamfer | pieces | genus (reference) | seconds |\n|---|---|---|---|---|---|---|",
         if mise {
             "MISE to 128^3 (Occupancy Networks' code, `tools/rfta-eval/inexact/mise_network.py`) and"
         } else {
@@ -121,44 +138,56 @@ pub(super) fn markdown(rows: &[CallableRow], mise: bool) -> String {
             r.seconds
         );
     }
-    let mean = |m: &str| {
+    // Means over the fields that have the baseline's row.
+    let mean = |m: &str, baseline: &str| {
         let v: Vec<f64> = rows
             .iter()
-            .filter(|r| r.method == m)
+            .filter(|r| r.method == m && baseline_of(rows, r).is_some_and(|b| b.method == baseline))
             .map(|r| r.chamfer)
             .collect();
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
-    if let (Some(rfta), Some(mise)) = (mean("rfta"), mean("mise")) {
+    if let (Some(rfta), Some(mise)) = (mean("rfta", "mise"), mean("mise", "mise")) {
         let _ = writeln!(
             s,
             "\nMean Chamfer: rfta {rfta:.5}, MISE {mise:.5} ({:.2}x).",
             rfta / mise
         );
     }
+    if let (Some(rfta), Some(mc)) = (mean("rfta", "mc"), mean("mc", "mc")) {
+        let _ = writeln!(
+            s,
+            "\nMean Chamfer of the CSG trees: rfta {rfta:.5}, marching cubes {mc:.5} ({:.2}x).",
+            rfta / mc
+        );
+    }
     s
 }
 
-/// The goals on the callable rows: rfta's Chamfer at most MISE's and no more pieces.
+/// The row `r` is held to: the same field's MISE row, or its marching cubes row without one.
+fn baseline_of<'a>(rows: &'a [CallableRow], r: &CallableRow) -> Option<&'a CallableRow> {
+    let of = |m: &str| rows.iter().find(|o| o.field == r.field && o.method == m);
+    of("mise").or_else(|| of("mc"))
+}
+
+/// The goals on the callable rows: rfta's Chamfer at most its baseline's (MISE's, or marching
+/// cubes' on as many points) and no more pieces.
 pub(super) fn missed(rows: &[CallableRow]) -> Vec<String> {
     let mut missed = Vec::new();
     for r in rows.iter().filter(|r| r.method == "rfta") {
-        let Some(m) = rows
-            .iter()
-            .find(|o| o.field == r.field && o.method == "mise")
-        else {
+        let Some(m) = baseline_of(rows, r) else {
             continue;
         };
         if r.chamfer > m.chamfer {
             missed.push(format!(
-                "{} as a callable: Chamfer {:.5} above MISE's {:.5}",
-                r.field, r.chamfer, m.chamfer
+                "{} as a callable: Chamfer {:.5} above {}'s {:.5}",
+                r.field, r.chamfer, m.method, m.chamfer
             ));
         }
         if r.summary.components > m.summary.components {
             missed.push(format!(
-                "{} as a callable: {} pieces, MISE {}",
-                r.field, r.summary.components, m.summary.components
+                "{} as a callable: {} pieces, {} {}",
+                r.field, r.summary.components, m.method, m.summary.components
             ));
         }
     }

@@ -10,15 +10,17 @@
 //! readings it did not choose of the level set and bounds are run too (`rfta-level-set`,
 //! `rfta-bound`). The reference is the field's
 //! zero set by marching cubes at `--reference-res` cells per axis, evaluated where the zero set
-//! passes. Chamfer as the evaluation's (`rfta_metrics::chamfer`). Each network is also asked as
-//! a function ([`callable`]): rfta's adaptive mode against MISE (`--mise VENV` or
-//! `$RFTA_MISE_VENV`) at MISE's evaluations.
+//! passes. Chamfer as the evaluation's (`rfta_metrics::chamfer`). Each field is also asked as
+//! a function ([`callable`]; the CSG trees not with `--quick`): rfta's adaptive mode against
+//! MISE (`--mise VENV` or `$RFTA_MISE_VENV`) at MISE's evaluations on the networks, against
+//! marching cubes on a grid of as many points on the CSG trees.
 //!
 //! Output: `<out>/results.csv`, `<out>/report.md`, `<out>/inexact-chamfer.svg`, each field's
-//! reference mesh (`<out>/FIELD-reference.ply`) and each network's meshes as a function
+//! reference mesh (`<out>/FIELD-reference.ply`) and its meshes as a function
 //! (`<out>/FIELD-mise.obj`, `<out>/FIELD-rfta.obj`). The run fails when a goal is missed
 //! ([`goals`]): on any field, a reading above marching cubes' Chamfer, with a sample on the
-//! wrong side or in more pieces; as a function, rfta above MISE's Chamfer or in more pieces.
+//! wrong side or in more pieces; as a function, rfta above its baseline's Chamfer or in more
+//! pieces.
 
 mod callable;
 mod fields;
@@ -137,7 +139,8 @@ pub(crate) fn command(a: &Args) -> Result<()> {
         for &n in &res {
             rows.extend(compare(field, n, &reference, samples)?);
         }
-        if field.kind == Kind::Network {
+        // CSG trees as functions in full runs (minutes each; `--quick` holds the grids).
+        if field.kind == Kind::Network || !a.quick {
             callable_rows.extend(callable::compare(
                 field,
                 &reference,
