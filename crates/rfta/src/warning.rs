@@ -127,6 +127,36 @@ pub enum Warning {
     },
 }
 
+/// How a grid of bounds was read ([`Warning::Bound`]).
+const BOUND_READING: &str = "read as bounds: every sphere stays empty space, but the tangency points off the zero set of the grid's smooth interpolant were moved onto it by Newton's method and the spheres were not fitted";
+
+/// How a function of bounds was read ([`Warning::BoundFunction`]).
+const BOUND_FUNCTION_READING: &str = "read as distances the mesh entered more of the spheres than the function's zero set does, so the mesh is that zero set (the samples asked carried onto a grid at the finest spacing reached, points put on it by Newton's method on the grid's smooth interpolant)";
+
+impl Warning {
+    /// The sentence of a warning about how the values were read (not as distances).
+    fn fmt_reading(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::LevelSet { reach } => write!(
+                f,
+                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
+                100.0 * reach
+            ),
+            Self::Bound { covered } | Self::BoundFunction { covered } => write!(
+                f,
+                "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; {} (field = distance reads them as distances)",
+                100.0 * covered,
+                if matches!(self, Self::Bound { .. }) {
+                    BOUND_READING
+                } else {
+                    BOUND_FUNCTION_READING
+                }
+            ),
+            _ => Ok(()),
+        }
+    }
+}
+
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -135,21 +165,9 @@ impl fmt::Display for Warning {
                 "the values look noisy, by up to {:.2}% of their magnitude (they change faster than a distance can, or overlap the other sign's): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
                 100.0 * fraction
             ),
-            Self::LevelSet { reach } => write!(
-                f,
-                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
-                100.0 * reach
-            ),
-            Self::Bound { covered } => write!(
-                f,
-                "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; read as bounds: every sphere stays empty space, but the tangency points off the zero set of the grid's smooth interpolant were moved onto it by Newton's method and the spheres were not fitted (field = distance reads them as distances)",
-                100.0 * covered
-            ),
-            Self::BoundFunction { covered } => write!(
-                f,
-                "the function's values are not distances: {:.1}% of the spheres near its zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give, and read as distances the mesh entered more of the spheres than the function's zero set does; the mesh is that zero set (the samples asked carried onto a grid at the finest spacing reached, points put on it by Newton's method on the grid's smooth interpolant; field = distance reads them as distances)",
-                100.0 * covered
-            ),
+            Self::LevelSet { .. } | Self::Bound { .. } | Self::BoundFunction { .. } => {
+                self.fmt_reading(f)
+            }
             Self::Clamped { at, samples } => write!(
                 f,
                 "the values look clamped at {at}: {samples} samples sit on flat plateaus at that magnitude; they are treated as at least {at} from the surface (set a clamp to override, or turn the check off)"
@@ -278,6 +296,12 @@ mod tests {
             worst: None,
         };
         assert!(w.to_string().starts_with("3 of 200 samples (1.5%) overlap"));
+        let w = Warning::BoundFunction { covered: 0.05 };
+        assert!(
+            w.to_string().contains(": 5.0% of the spheres")
+                && w.to_string().contains("the mesh is that zero set"),
+            "{w}"
+        );
         let w = Warning::Cavities {
             count: 1,
             kept: true,
