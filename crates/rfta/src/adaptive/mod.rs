@@ -24,7 +24,9 @@
 //! samples contradict removed (no spheres cleared, no cavities opened, no verdict). The last
 //! runs the caller's [`Params`], at the depth of `FINAL_CELLS_PER_SPACING` (2.0) unless one is set.
 //! A pass that would leave less than a quarter of the samples so far for another takes the
-//! rest of the budget itself. Every choice is a function of
+//! rest of the budget itself. A last pass whose mesh enters the samples' spheres or leaves one
+//! on the wrong side is weighed against the samples' zero set when their spheres are bounds
+//! (a CSG tree, a smooth blend: `bounds.rs`). Every choice is a function of
 //! the values asked for (sorted lattice keys, errors ordered with ties broken by key), so a
 //! deterministic oracle gives the same samples and the same mesh on any number of threads.
 //! The oracle's time is measured apart from rfta's ([`AdaptiveReport`]).
