@@ -258,23 +258,20 @@ fn targets(
             if met { "met" } else { "**not met**" },
         ));
     }
-    if lines.is_empty() {
-        return Ok(());
-    }
-    writeln!(
+    table(
         s,
-        "The speed issue's targets for the default preset on 2 threads (mean wall seconds per shape, the largest peak memory):\n"
-    )?;
-    writeln!(
-        s,
-        "| N | shapes | wall s | target s | peak MB | target MB | |"
-    )?;
-    writeln!(s, "|{}", "---|".repeat(7))?;
-    for l in lines {
-        writeln!(s, "{l}")?;
-    }
-    writeln!(s)?;
-    Ok(())
+        "The speed issue's targets for the default preset on 2 threads (mean wall seconds per shape, the largest peak memory):",
+        &[
+            "N",
+            "shapes",
+            "wall s",
+            "target s",
+            "peak MB",
+            "target MB",
+            "",
+        ],
+        &lines,
+    )
 }
 
 /// The simplification issue's time target (issue 59: the step at most [`SIMPLIFY_SHARE`] of the
@@ -308,18 +305,28 @@ fn simplification_share(
             },
         ));
     }
-    if lines.is_empty() {
+    table(
+        s,
+        &format!(
+            "The simplification's share of the default preset's wall time on 2 threads (issue 59's target: at most {:.0}%):",
+            100.0 * SIMPLIFY_SHARE
+        ),
+        &["N", "shapes", "step s", "wall s", "share", ""],
+        &lines,
+    )
+}
+
+/// A markdown table of `rows` (already formatted) under `intro` and `header`; nothing without
+/// rows.
+fn table(s: &mut String, intro: &str, header: &[&str], rows: &[String]) -> Result<()> {
+    if rows.is_empty() {
         return Ok(());
     }
-    writeln!(
-        s,
-        "The simplification's share of the default preset's wall time on 2 threads (issue 59's target: at most {:.0}%):\n",
-        100.0 * SIMPLIFY_SHARE
-    )?;
-    writeln!(s, "| N | shapes | step s | wall s | share | |")?;
-    writeln!(s, "|{}", "---|".repeat(6))?;
-    for l in lines {
-        writeln!(s, "{l}")?;
+    writeln!(s, "{intro}\n")?;
+    writeln!(s, "| {} |", header.join(" | "))?;
+    writeln!(s, "|{}", "---|".repeat(header.len()))?;
+    for r in rows {
+        writeln!(s, "{r}")?;
     }
     writeln!(s)?;
     Ok(())
