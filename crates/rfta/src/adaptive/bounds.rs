@@ -18,10 +18,12 @@
 //! (Chamfer 0.00449 against 0.00141), the drilled cube 0.00529 against 0.00158, both with
 //! thousands of spheres entered where the distance reading entered 131 and 4.
 
+use std::sync::atomic::AtomicBool;
+
 use rfta_geom::SdfSamples;
 
+use super::AdaptiveReconstruction;
 use super::lattice::{FINEST, Lattice};
-use super::{AdaptiveReconstruction, Asker};
 use crate::field::{Field, FieldReport, Reading};
 use crate::plan::with_plan;
 use crate::{Params, Result, Stage, Warning};
@@ -61,9 +63,9 @@ pub(super) fn dense(lattice: &Lattice) -> Result<(SdfSamples, Vec<bool>)> {
 pub(super) fn read_again_if_bounds(
     mut read: AdaptiveReconstruction,
     lattice: &Lattice,
-    asker: &mut Asker<'_>,
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
 ) -> Result<AdaptiveReconstruction> {
     let disagreement = |c: &crate::Consistency| (c.sign_errors, c.entered);
     let first = disagreement(&read.reconstruction.report.consistency);
@@ -72,7 +74,7 @@ pub(super) fn read_again_if_bounds(
         return Ok(read);
     }
     let t = std::time::Instant::now();
-    let second = level_set_reading(lattice, asker, params, progress)?;
+    let second = level_set_reading(lattice, &read.samples, params, progress, cancel)?;
     let report = &mut read.report;
     if let Some(last) = report.passes.last_mut() {
         last.rfta_seconds += t.elapsed().as_secs_f64();
@@ -84,13 +86,14 @@ pub(super) fn read_again_if_bounds(
     Ok(read)
 }
 
-/// The level-set reading of the lattice's dense grid from the points of the samples asked,
+/// The level-set reading of the lattice's dense grid from the points of the samples `asked`,
 /// measured against them; `None` when the grid does not read as bounds.
 fn level_set_reading(
     lattice: &Lattice,
-    asker: &mut Asker<'_>,
+    asked: &SdfSamples,
     params: &Params,
     progress: &mut (dyn FnMut(Stage) + Send),
+    cancel: &AtomicBool,
 ) -> Result<Option<crate::Reconstruction>> {
     let (grid, known) = dense(lattice)?;
     // The grid's values between the asked ones are interpolated: the input check would judge
@@ -124,8 +127,8 @@ fn level_set_reading(
         return Ok(None);
     };
     let points = crate::field::zero_set_points(&grid, Some(&known));
-    let mut reconstruction = crate::run(&grid, &read, Some(&points), progress, asker.cancel)?;
-    super::level_set::agree_with_asked(&mut reconstruction, &lattice.samples()?)?;
+    let mut reconstruction = crate::run(&grid, &read, Some(&points), progress, cancel)?;
+    super::level_set::agree_with_asked(&mut reconstruction, asked)?;
     reconstruction.report.field = FieldReport {
         read_as: Reading::LevelSet,
         ..field

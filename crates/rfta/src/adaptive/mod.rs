@@ -235,7 +235,7 @@ pub fn reconstruct_adaptive(
         &lattice, &mut asker, left, params, seeds, report, progress, on_pass,
     )?;
     // A function whose spheres are bounds is read again on a dense grid (`bounds.rs`).
-    bounds::read_again_if_bounds(read, &lattice, &mut asker, params, progress)
+    bounds::read_again_if_bounds(read, &lattice, params, progress, asker.cancel)
 }
 
 /// [`Error::InvalidParams`] for invalid `params`, a box that is not finite with positive extent,
