@@ -133,28 +133,15 @@ const BOUND_READING: &str = "read as bounds: every sphere stays empty space, but
 /// How a function of bounds was read ([`Warning::BoundFunction`]).
 const BOUND_FUNCTION_READING: &str = "read as distances the mesh entered more of the spheres than the function's zero set does, so the mesh is that zero set (the samples asked carried onto a grid at the finest spacing reached, points put on it by Newton's method on the grid's smooth interpolant)";
 
-impl Warning {
-    /// The sentence of a warning about how the values were read (not as distances).
-    fn fmt_reading(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::LevelSet { reach } => write!(
-                f,
-                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
-                100.0 * reach
-            ),
-            Self::Bound { covered } | Self::BoundFunction { covered } => write!(
-                f,
-                "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; {} (field = distance reads them as distances)",
-                100.0 * covered,
-                if matches!(self, Self::Bound { .. }) {
-                    BOUND_READING
-                } else {
-                    BOUND_FUNCTION_READING
-                }
-            ),
-            _ => Ok(()),
-        }
-    }
+/// The sentence of a bound reading: `covered` the share of the spheres near the zero set that
+/// others cover, `reading` how the values were read ([`BOUND_READING`] or
+/// [`BOUND_FUNCTION_READING`]).
+fn fmt_bounds(f: &mut fmt::Formatter<'_>, covered: f64, reading: &str) -> fmt::Result {
+    write!(
+        f,
+        "the values are not distances: {:.1}% of the spheres near their zero set have no point outside every other sphere (a distance's sphere touches the surface where no other reaches), as a CSG tree's min and max or a smooth blend give; {reading} (field = distance reads them as distances)",
+        100.0 * covered
+    )
 }
 
 impl fmt::Display for Warning {
@@ -165,9 +152,13 @@ impl fmt::Display for Warning {
                 "the values look noisy, by up to {:.2}% of their magnitude (they change faster than a distance can, or overlap the other sign's): a point counts as inside another sample's sphere only deeper than that (twice over), so that noise does not cover tangency points",
                 100.0 * fraction
             ),
-            Self::LevelSet { .. } | Self::Bound { .. } | Self::BoundFunction { .. } => {
-                self.fmt_reading(f)
-            }
+            Self::LevelSet { reach } => write!(
+                f,
+                "the values are not distances: far from their zero set they reach {:.0}% of the way to it (a distance reaches all of it), as a trained network's or a CSG bound's do; the mesh is the field's zero set (points put on it by Newton's method on the grid's smooth interpolant), not the spheres' (field = distance reads them as distances)",
+                100.0 * reach
+            ),
+            Self::Bound { covered } => fmt_bounds(f, *covered, BOUND_READING),
+            Self::BoundFunction { covered } => fmt_bounds(f, *covered, BOUND_FUNCTION_READING),
             Self::Clamped { at, samples } => write!(
                 f,
                 "the values look clamped at {at}: {samples} samples sit on flat plateaus at that magnitude; they are treated as at least {at} from the surface (set a clamp to override, or turn the check off)"
