@@ -379,7 +379,8 @@ impl Params {
 
     /// The settings of the solves inside the fine-tuning rounds: [`Params::spsr_params`] with
     /// `ROUND_SWEEPS` (4) Gauss-Seidel sweeps per depth, one depth coarser beyond
-    /// `ROUND_FULL_DEPTH` (10) (the screening weight stays the final depth's).
+    /// `ROUND_FULL_DEPTH` (10) (the screening weight stays the final depth's). The adaptive
+    /// passes' rounds solve coarser still from a final depth of 10 (`adaptive::coarser_rounds`).
     pub fn round_spsr_params(&self, spacing: Option<f64>) -> SpsrParams {
         let last = self.spsr_params(spacing);
         SpsrParams {

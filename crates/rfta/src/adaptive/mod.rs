@@ -23,6 +23,8 @@
 //! `GUIDE_ROUNDS` (3) fine-tuning rounds and end at the final solve with the components the
 //! samples contradict removed (no spheres cleared, no cavities opened, no verdict). The last
 //! runs the caller's [`Params`], at the depth of `FINAL_CELLS_PER_SPACING` (2.0) unless one is set.
+//! In every pass whose final solve is at depth 10 or more the rounds solve two depths coarser
+//! (`coarser_rounds`).
 //! A pass that would leave less than a quarter of the samples so far for another takes the
 //! rest of the budget itself. A last pass whose mesh enters the samples' spheres or leaves one
 //! on the wrong side is weighed against the samples' zero set when their spheres are bounds
@@ -270,8 +272,9 @@ fn guide_pass(
     cancel: &AtomicBool,
 ) -> Result<(TriMesh, TangentPoints)> {
     let go_on = || crate::go_on(cancel);
-    with_plan(samples, params, |plan, mut journal| {
+    with_plan(samples, params, |mut plan, mut journal| {
         go_on()?;
+        coarser_rounds(&mut plan);
         let (cloud, _) = initial::initial_points(&plan, seeds, &mut journal, progress)?;
         let (cloud, _) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
         go_on()?;
@@ -285,6 +288,25 @@ fn guide_pass(
         Ok((out.mesh, out.points))
     })
 }
+
+/// The adaptive passes' fine-tuning rounds solve [`ROUND_DEPTHS_COARSER`] depths below a final
+/// solve of depth [`COARSER_ROUNDS_FROM`] or more (about half a cell per finest sample spacing at
+/// the last pass's [`FINAL_CELLS_PER_SPACING`]) instead of the grid pipeline's one below depth 11
+/// and none below that ([`Params::round_spsr_params`]): a round's surface only guides the next
+/// moves, and the adaptive samples put a tangency point on the surface per sample, so ten rounds
+/// solving at the final depth cost about five final solves (docs/speed.md, "Adaptive runs").
+fn coarser_rounds(plan: &mut crate::plan::Plan<'_>) {
+    if plan.final_spsr.depth >= COARSER_ROUNDS_FROM {
+        plan.round_spsr.depth = plan.final_spsr.depth - ROUND_DEPTHS_COARSER;
+    }
+}
+
+/// See [`coarser_rounds`]: below depth 10 a round's solve is cheap, and one depth coarser lost
+/// the knight's one piece at a third of MISE's evaluations (depth 9).
+const COARSER_ROUNDS_FROM: u32 = 10;
+
+/// See [`coarser_rounds`].
+const ROUND_DEPTHS_COARSER: u32 = 2;
 
 /// A pass before the last asks up to this many times the samples it starts from: more of the
 /// cells the surface may cross refined a level before any goes two, nearer MISE's level at a time
@@ -327,8 +349,9 @@ fn final_pass(
         ..params.clone()
     };
     let go_on = || crate::go_on(cancel);
-    let rec = with_plan(&samples, &params, |plan, mut journal| {
+    let rec = with_plan(&samples, &params, |mut plan, mut journal| {
         go_on()?;
+        coarser_rounds(&mut plan);
         let seeds = seeds.as_ref();
         let (cloud, initial) = initial::initial_points(&plan, seeds, &mut journal, progress)?;
         let (cloud, rounds) = rounds::fine_tune(&plan, cloud, &mut journal, progress, &go_on)?;
