@@ -179,7 +179,15 @@ mod tests {
         let before = volume(&torus);
         let loops = short_loops(&torus, 2.0).expect("closed");
         assert_eq!(loops.loops.len(), 1);
-        assert!(cut_along(&mut torus, &loops.loops[0], 0.01));
+        // The loop's centre before the cut: midway between the two caps after it (the loop's
+        // own vertices move to one cap, so their centre afterwards lies on it).
+        let cycle = &loops.loops[0];
+        let centre = cycle
+            .iter()
+            .map(|&v| torus.vertices[v as usize])
+            .sum::<DVec3>()
+            / cycle.len() as f64;
+        assert!(cut_along(&mut torus, cycle, 0.01));
         let t = check(&torus);
         assert_eq!((t.genus(), t.components), (Some(0), 1));
         // The slit is 0.01 wide across a tube of area pi 0.2^2 (the caps' sag is below it).
@@ -188,15 +196,14 @@ mod tests {
             cut < 0.01 * 0.2 * 0.2 * std::f64::consts::PI * 1.05,
             "{cut}"
         );
-        // Both caps face outward: a point in the slit is outside, points beside it inside.
+        // Both caps face outward: a point in the slit is outside, points beside it inside (the
+        // tube's direction at the loop is horizontal, across the loop's plane through the axis).
         let index = MeshIndex::new(&torus).expect("index");
-        let cycle = &loops.loops[0];
-        let centre = cycle
-            .iter()
-            .map(|&v| torus.vertices[v as usize])
-            .sum::<DVec3>()
-            / cycle.len() as f64;
         assert!(index.winding_number(centre) < 0.1);
+        let along = DVec3::new(-centre.y, centre.x, 0.0).normalize();
+        for side in [-0.05, 0.05] {
+            assert!(index.winding_number(centre + side * along) > 0.9);
+        }
     }
 
     #[test]
