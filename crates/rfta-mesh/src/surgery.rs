@@ -14,9 +14,8 @@ use rfta_geom::glam::DVec3;
 /// the genus one lower, a bar cut through or a tunnel filled. The two sides move `gap / 2` apart
 /// along the loop's normal (Newell's, turned toward the side the loop's vertices keep), the
 /// loop's own vertices and their copies only: a bar's slit is outside, a tunnel's filled slab
-/// inside. Returns
-/// whether it cut: not when `cycle` is not a simple loop of at least three edges with a face
-/// on each side of each edge (the mesh is then unchanged).
+/// inside. Returns whether it cut: not when `cycle` is not a simple loop of at least three edges
+/// with a face on each side of each edge (the mesh is then unchanged).
 pub fn cut_along(mesh: &mut TriMesh, cycle: &[u32], gap: f64) -> bool {
     let k = cycle.len();
     if k < 3 || cycle.iter().any(|&v| v as usize >= mesh.vertices.len()) {
