@@ -184,6 +184,15 @@ mod tests {
             .sum()
     }
 
+    /// The mean of a loop's vertices.
+    fn centroid(mesh: &TriMesh, cycle: &[u32]) -> DVec3 {
+        cycle
+            .iter()
+            .map(|&v| mesh.vertices[v as usize])
+            .sum::<DVec3>()
+            / cycle.len() as f64
+    }
+
     #[test]
     fn cutting_a_tube_leaves_a_sphere_of_the_same_volume() {
         let mut torus = shapes::torus(1.0, 0.2, 48, 12);
@@ -193,11 +202,7 @@ mod tests {
         // The loop's centre before the cut: midway between the two caps after it (the loop's
         // own vertices move to one cap, so their centre afterwards lies on it).
         let cycle = &loops.loops[0];
-        let centre = cycle
-            .iter()
-            .map(|&v| torus.vertices[v as usize])
-            .sum::<DVec3>()
-            / cycle.len() as f64;
+        let centre = centroid(&torus, cycle);
         assert!(cut_along(&mut torus, cycle, 0.01));
         let t = check(&torus);
         assert_eq!((t.genus(), t.components), (Some(0), 1));
@@ -224,11 +229,7 @@ mod tests {
         let loops = short_loops(&torus, 1.0).expect("closed");
         assert_eq!(loops.loops.len(), 1, "{:?}", loops.lengths);
         let cycle = &loops.loops[0];
-        let centre = cycle
-            .iter()
-            .map(|&v| torus.vertices[v as usize])
-            .sum::<DVec3>()
-            / cycle.len() as f64;
+        let centre = centroid(&torus, cycle);
         let before = volume(&torus);
         assert!(cut_along(&mut torus, cycle, 0.1));
         let t = check(&torus);
