@@ -1,22 +1,161 @@
-//! Building the tree: obvhs over the spheres' boxes, flattened into `f64` nodes.
+//! Building the tree: obvhs over the spheres' boxes, flattened into exact nodes, then laid out
+//! for the queries (`f32` bounds of a cache line each, children side by side).
 
 use std::time::Duration;
 
 use obvhs::{BvhBuildParams, aabb::Aabb as ObAabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
-use rfta_geom::{Aabb, Sphere, glam::DVec3, glam::Vec3A};
+use rfta_geom::{Aabb, Sphere, glam::DVec3, glam::Vec3A, glam::Vec4};
 
-/// A node: the box of its spheres' centres, their largest radius, the union of their boxes
-/// (for the reference-order traversal), and either two children or a range of spheres.
+/// A node's bound as the queries read it: one 64-byte record (a cache line; 120 bytes in
+/// `f64`) in `f32`, rounded so that every bound it gives is at most the exact one (boxes outward,
+/// the radius up, and [`Bound::slack`] for the arithmetic's rounding). The leaves' tests stay
+/// exact in `f64`, so the answers are those of an `f64` tree; only the nodes within a millionth
+/// of the coordinates' size of the threshold are entered in addition.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Node {
-    pub(crate) centers: Aabb,
-    pub(crate) max_radius: f64,
-    pub(crate) bounds: Aabb,
-    /// Leaf: first sphere; inner: left child.
-    pub(crate) a: u32,
-    /// Leaf: sphere count; inner: right child.
-    pub(crate) b: u32,
-    pub(crate) leaf: bool,
+#[repr(C, align(64))]
+pub(crate) struct Bound {
+    /// The box of the spheres' centres; `w` of the low corner is the largest radius (rounded
+    /// up), `w` of the high corner the slack.
+    centers_min: Vec4,
+    centers_max: Vec4,
+    /// The union of the spheres' boxes (`w` unused).
+    bounds_min: Vec4,
+    bounds_max: Vec4,
+}
+
+/// The relative error allowed for the `f32` bounds: the rounding of the query point (`2^-24` per
+/// coordinate), of the subtractions, squares, sums and square roots (a few `2^-24` of the
+/// distance), with a margin of four.
+pub(crate) const SLACK: f32 = 4e-6;
+
+impl Bound {
+    fn new(w: &Wide) -> Self {
+        let (centers_min, centers_max) = w.centers.to_f32_outward();
+        let (bounds_min, bounds_max) = w.bounds.to_f32_outward();
+        let r = w.max_radius as f32;
+        let max_radius = if (r as f64) < w.max_radius {
+            r.next_up()
+        } else {
+            r
+        };
+        let scale = [centers_min, centers_max, bounds_min, bounds_max]
+            .iter()
+            .map(|v| v.abs().max_element())
+            .fold(max_radius.abs(), f32::max);
+        // A scale beyond f32 (or NaN) makes the slack infinite: the node is always entered.
+        let slack = if scale.is_finite() {
+            SLACK * (1.0 + scale)
+        } else {
+            f32::INFINITY
+        };
+        Self {
+            centers_min: centers_min.extend(max_radius),
+            centers_max: centers_max.extend(slack),
+            bounds_min: bounds_min.extend(0.0),
+            bounds_max: bounds_max.extend(0.0),
+        }
+    }
+
+    pub(crate) fn centers_min(&self) -> Vec3A {
+        Vec3A::from_vec4(self.centers_min)
+    }
+
+    pub(crate) fn centers_max(&self) -> Vec3A {
+        Vec3A::from_vec4(self.centers_max)
+    }
+
+    pub(crate) fn bounds_min(&self) -> Vec3A {
+        Vec3A::from_vec4(self.bounds_min)
+    }
+
+    pub(crate) fn bounds_max(&self) -> Vec3A {
+        Vec3A::from_vec4(self.bounds_max)
+    }
+
+    /// The largest radius of the node's spheres, rounded up.
+    pub(crate) fn max_radius(&self) -> f32 {
+        self.centers_min.w
+    }
+
+    /// What a bound computed in `f32` from this node may exceed the exact one by, but for the
+    /// query point's own share: [`SLACK`] times the node's largest coordinate and radius;
+    /// infinite when they do not fit in `f32` (the node is then always entered).
+    pub(crate) fn slack(&self) -> f32 {
+        self.centers_max.w
+    }
+
+    /// The box of the spheres' boxes, in `f64` (outward of the exact one).
+    pub(crate) fn bounds(&self) -> Aabb {
+        Aabb::new(self.bounds_min().as_dvec3(), self.bounds_max().as_dvec3())
+    }
+}
+
+/// Where a node leads: an inner node's two children sit side by side at `a` and `a + 1` (their
+/// bounds, read together, are two adjacent cache lines); a leaf holds the `b & !LEAF` spheres
+/// from `a` of the tree's arrays.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Link {
+    a: u32,
+    b: u32,
+}
+
+/// The bit of [`Link`]'s `b` that marks a leaf.
+const LEAF: u32 = 1 << 31;
+
+impl Link {
+    /// The first child of an inner node (the second follows it); `None` for a leaf.
+    pub(crate) fn children(self) -> Option<u32> {
+        (self.b & LEAF == 0).then_some(self.a)
+    }
+
+    /// A leaf's spheres, as positions in the tree's arrays (empty for an inner node).
+    pub(crate) fn spheres(self) -> std::ops::Range<usize> {
+        match self.children() {
+            Some(_) => 0..0,
+            None => self.a as usize..(self.a + (self.b & !LEAF)) as usize,
+        }
+    }
+}
+
+/// A node while it is built, exact: the box of its spheres' centres, their largest radius, the
+/// union of their boxes, and either two children or a range of spheres.
+#[derive(Debug, Clone, Copy)]
+struct Wide {
+    centers: Aabb,
+    max_radius: f64,
+    bounds: Aabb,
+    a: u32,
+    b: u32,
+    leaf: bool,
+}
+
+/// The built tree (`wide`, depth first from its root at 0) laid out for the queries: breadth
+/// first, each node's two children next to each other.
+fn narrow(wide: &[Wide]) -> (Vec<Bound>, Vec<Link>) {
+    let mut bounds = vec![Bound::new(&wide[0])];
+    let mut links = vec![Link::default()];
+    // `origin[n]`: the built node that node `n` of the layout is.
+    let mut origin = vec![0usize];
+    let mut n = 0;
+    while n < origin.len() {
+        let w = &wide[origin[n]];
+        links[n] = if w.leaf {
+            Link {
+                a: w.a,
+                b: w.b | LEAF,
+            }
+        } else {
+            let first = origin.len() as u32;
+            for child in [w.a as usize, w.b as usize] {
+                bounds.push(Bound::new(&wide[child]));
+                links.push(Link::default());
+                origin.push(child);
+            }
+            Link { a: first, b: 0 }
+        };
+        n += 1;
+    }
+    (bounds, links)
 }
 
 /// A static bounding volume hierarchy over spheres, answering containment queries.
@@ -28,10 +167,12 @@ pub(crate) struct Node {
 /// Building is `O(n log n)`. A query costs `O(log n)` node visits when few spheres come near the
 /// point, and grows with the number of spheres whose centre box and radius cannot be told apart
 /// from a containing one; see the crate documentation for why this is tighter than a box test.
-/// Memory is about 150 bytes per sphere.
+/// Memory is about 75 bytes per sphere once built (a node of 72 bytes per two spheres, the
+/// spheres' centres, radii and indices).
 #[derive(Debug, Clone, Default)]
 pub struct SphereTree {
-    pub(crate) nodes: Vec<Node>,
+    pub(crate) bounds: Vec<Bound>,
+    pub(crate) links: Vec<Link>,
     pub(crate) centers: Vec<DVec3>,
     pub(crate) radii: Vec<f64>,
     pub(crate) ids: Vec<u32>,
@@ -81,7 +222,9 @@ impl SphereTree {
         let ob = build_bvh2(&boxes, params, &mut Duration::default());
         let mut tree = Self::default();
         let mut order = Vec::with_capacity(chosen.len());
-        flatten(&mut tree.nodes, &ob, 0, &chosen, &mut order);
+        let mut wide = Vec::with_capacity(ob.nodes.len());
+        flatten(&mut wide, &ob, 0, &chosen, &mut order);
+        (tree.bounds, tree.links) = narrow(&wide);
         tree.centers = order.iter().map(|&p| chosen[p as usize].center).collect();
         tree.radii = order.iter().map(|&p| chosen[p as usize].radius).collect();
         tree.ids = order.iter().map(|&p| ids[p as usize]).collect();
@@ -117,7 +260,7 @@ impl SphereTree {
 }
 
 fn flatten(
-    nodes: &mut Vec<Node>,
+    nodes: &mut Vec<Wide>,
     ob: &Bvh2,
     ob_idx: usize,
     spheres: &[Sphere],
@@ -125,7 +268,7 @@ fn flatten(
 ) -> u32 {
     let node = &ob.nodes[ob_idx];
     let my = nodes.len() as u32;
-    let empty = Node {
+    let empty = Wide {
         centers: Aabb::EMPTY,
         max_radius: 0.0,
         bounds: Aabb::EMPTY,
@@ -137,7 +280,7 @@ fn flatten(
     let filled = if node.is_leaf() {
         let first = order.len() as u32;
         let range = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        let mut out = Node {
+        let mut out = Wide {
             leaf: true,
             a: first,
             b: node.prim_count,
@@ -155,7 +298,7 @@ fn flatten(
         let left = flatten(nodes, ob, node.first_index as usize, spheres, order);
         let right = flatten(nodes, ob, node.first_index as usize + 1, spheres, order);
         let (l, r) = (nodes[left as usize], nodes[right as usize]);
-        Node {
+        Wide {
             centers: l.centers.union(r.centers),
             max_radius: l.max_radius.max(r.max_radius),
             bounds: l.bounds.union(r.bounds),

@@ -21,7 +21,9 @@
 //! every sphere within a threshold, for callers that test many nearby points.
 //! `cargo bench -p rfta-sphere-tree` measures the gain.
 //!
-//! obvhs builds the hierarchy; it never appears in this crate's API. All tests are exact in `f64`.
+//! obvhs builds the hierarchy; it never appears in this crate's API. Every answer is exact in
+//! `f64`: the nodes' bounds are kept in `f32` (a node is one cache line), rounded so that they
+//! never exceed the exact bounds, and the spheres themselves are tested in `f64`.
 //!
 //! # Example
 //! ```

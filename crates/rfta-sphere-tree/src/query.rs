@@ -2,7 +2,9 @@
 
 use rfta_geom::glam::DVec3;
 
-use crate::build::{Node, SphereTree};
+use rfta_geom::glam::Vec3A;
+
+use crate::build::{Bound, Link, SLACK, SphereTree};
 
 /// Lower bound of `|x - p_j| - r_j` over the node's spheres: the larger of two bounds.
 ///
@@ -12,15 +14,33 @@ use crate::build::{Node, SphereTree};
 ///   distance to the box's boundary, since the ball of that depth around `x` lies in the sphere
 ///   and so in the box. Tight where one large sphere shares a node with small ones.
 ///
-/// The second is lowered by a relative `1e-12` so that rounding never prunes a sphere the exact
-/// test would report.
-fn lower_bound(node: &Node, x: DVec3) -> f64 {
-    let by_centres = node.centers.distance_squared(x).sqrt() - node.max_radius;
-    let b = &node.bounds;
-    let d = (b.min - x).max(x - b.max);
-    let by_box = d.max(DVec3::ZERO).length() + d.max_element().min(0.0);
-    let slack = 1e-12 * (1.0 + x.abs().max_element() + (b.max - b.min).max_element());
-    by_centres.max(by_box - slack)
+/// Computed in `f32` from the node's outward-rounded record ([`Bound`]) and lowered by the node's
+/// and the query's slack (`at.slack`), so that rounding never prunes a sphere the exact test
+/// would report; a bound that is not a number (coordinates beyond `f32`) is `-inf`.
+fn lower_bound(node: &Bound, at: &Query) -> f32 {
+    let x = at.x;
+    let c = (node.centers_min() - x).max(x - node.centers_max());
+    let by_centres = c.max(Vec3A::ZERO).length() - node.max_radius();
+    let d = (node.bounds_min() - x).max(x - node.bounds_max());
+    let by_box = d.max(Vec3A::ZERO).length() + d.max_element().min(0.0);
+    let lb = by_centres.max(by_box) - (node.slack() + at.slack);
+    if lb.is_nan() { f32::NEG_INFINITY } else { lb }
+}
+
+/// A query point as the bounds read it: rounded to `f32`, with its share of the slack.
+struct Query {
+    x: Vec3A,
+    slack: f32,
+}
+
+impl Query {
+    fn new(x: DVec3) -> Self {
+        let x = x.as_vec3a();
+        Self {
+            x,
+            slack: SLACK * x.abs().max_element(),
+        }
+    }
 }
 
 impl SphereTree {
@@ -72,7 +92,7 @@ impl SphereTree {
             // Once k hits are held, only spheres at least as deep as the k-th can still enter.
             Visit::Bound(lb) => lb < threshold && !(hits.len() == k && lb > hits[k - 1].0),
             Visit::Leaf(node) => {
-                for s in node.a as usize..(node.a + node.b) as usize {
+                for s in node.spheres() {
                     let id = self.ids[s];
                     if Some(id) == ignore {
                         continue;
@@ -110,7 +130,7 @@ impl SphereTree {
             Visit::Bound(lb) => lb < threshold,
             Visit::Leaf(node) => {
                 out.extend(
-                    (node.a as usize..(node.a + node.b) as usize)
+                    node.spheres()
                         .filter(|&s| {
                             Some(self.ids[s]) != ignore
                                 && (x - self.centers[s]).length() - self.radii[s] < threshold
@@ -132,23 +152,23 @@ impl SphereTree {
         threshold: f64,
         ignore: Option<u32>,
     ) -> bool {
-        if self.nodes.is_empty() {
+        if self.bounds.is_empty() {
             return false;
         }
         let pad = threshold.max(0.0);
         let mut stack: Vec<u32> = vec![0];
         while let Some(idx) = stack.pop() {
-            let node = &self.nodes[idx as usize];
-            if !node.bounds.padded(pad).contains(x) {
+            if !self.bounds[idx as usize].bounds().padded(pad).contains(x) {
                 continue;
             }
-            if node.leaf {
-                if self.leaf_hit(node, x, threshold, ignore) {
-                    return true;
+            let link = self.links[idx as usize];
+            match link.children() {
+                Some(first) => stack.extend([first + 1, first]),
+                None => {
+                    if self.leaf_hit(link, x, threshold, ignore) {
+                        return true;
+                    }
                 }
-            } else {
-                stack.push(node.b);
-                stack.push(node.a);
             }
         }
         false
@@ -156,38 +176,43 @@ impl SphereTree {
 }
 
 /// What [`SphereTree::traverse`] asks its visitor about.
-enum Visit<'a> {
+enum Visit {
     /// A node whose spheres all have signed distance at least this: descend into it?
     Bound(f64),
     /// A leaf to examine: go on?
-    Leaf(&'a Node),
+    Leaf(Link),
 }
 
 impl SphereTree {
     /// Nearest-first traversal from `x`: `visit` decides, from each node's lower bound, whether
     /// to enter it, and examines each leaf entered; the traversal ends when it says to stop.
-    fn traverse<'a>(&'a self, x: DVec3, mut visit: impl FnMut(Visit<'a>) -> bool) {
-        if self.nodes.is_empty() {
+    fn traverse(&self, x: DVec3, mut visit: impl FnMut(Visit) -> bool) {
+        // A point that is not a number is in no sphere (every test is false).
+        if self.bounds.is_empty() || !x.is_finite() {
             return;
         }
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, lower_bound(&self.nodes[0], x)));
+        let at = Query::new(x);
+        let mut stack: Vec<(u32, f32)> = Vec::with_capacity(64);
+        stack.push((0, lower_bound(&self.bounds[0], &at)));
         while let Some((idx, lb)) = stack.pop() {
-            if !visit(Visit::Bound(lb)) {
+            if !visit(Visit::Bound(lb as f64)) {
                 continue;
             }
-            let node = &self.nodes[idx as usize];
-            if !node.leaf {
-                push_ordered(&mut stack, &self.nodes, node, x);
-            } else if !visit(Visit::Leaf(node)) {
-                return;
+            let link = self.links[idx as usize];
+            match link.children() {
+                Some(first) => push_ordered(&mut stack, &self.bounds, first, &at),
+                None => {
+                    if !visit(Visit::Leaf(link)) {
+                        return;
+                    }
+                }
             }
         }
     }
 
     /// Whether a sphere of leaf `node`, other than `ignore`, has signed distance below `threshold` at `x`.
-    fn leaf_hit(&self, node: &Node, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
-        (node.a as usize..(node.a + node.b) as usize).any(|s| {
+    fn leaf_hit(&self, node: Link, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
+        node.spheres().any(|s| {
             Some(self.ids[s]) != ignore
                 && (x - self.centers[s]).length() - self.radii[s] < threshold
         })
@@ -200,11 +225,11 @@ fn less(a: (f64, u32), b: (f64, u32)) -> bool {
 }
 
 /// Pushes both children, the one with the smaller bound last so that it is visited first.
-fn push_ordered(stack: &mut Vec<(u32, f64)>, nodes: &[Node], node: &Node, x: DVec3) {
-    let (l, r) = (node.a, node.b);
+fn push_ordered(stack: &mut Vec<(u32, f32)>, bounds: &[Bound], first: u32, at: &Query) {
+    let (l, r) = (first, first + 1);
     let (lb_l, lb_r) = (
-        lower_bound(&nodes[l as usize], x),
-        lower_bound(&nodes[r as usize], x),
+        lower_bound(&bounds[l as usize], at),
+        lower_bound(&bounds[r as usize], at),
     );
     if lb_l <= lb_r {
         stack.push((r, lb_r));

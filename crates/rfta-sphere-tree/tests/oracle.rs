@@ -115,6 +115,42 @@ fn agrees_with_oracle_on_adversarial_sets() {
     }
 }
 
+/// The nodes' bounds are `f32`: far from the origin their rounding is larger than the gap
+/// between a query's threshold and a sphere's signed distance. Spheres around (1000, -2000, 500)
+/// (an `f32` ulp there is 6e-5 to 1.2e-4), each queried at signed distance just below each
+/// threshold (by 1e-9) along a random direction: the tree must still find every one, as the
+/// oracle does. A bound rounded the wrong way prunes such spheres.
+#[test]
+fn agrees_with_oracle_where_f32_rounding_exceeds_the_margin() {
+    let offset = DVec3::new(1000.0, -2000.0, 500.0);
+    let mut rng = Rng::new(11);
+    let spheres: Vec<Sphere> = (0..3000)
+        .map(|_| {
+            let c = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            Sphere::new(offset + c, 0.002 + 0.02 * rng.next_f64())
+        })
+        .collect();
+    let tree = SphereTree::new(&spheres);
+    for q in 0..400 {
+        let i = rng.below(spheres.len() as u64) as usize;
+        let dir = DVec3::new(
+            rng.next_f64() - 0.5,
+            rng.next_f64() - 0.5,
+            rng.next_f64() - 0.5,
+        )
+        .normalize_or(DVec3::X);
+        for threshold in [-1e-4, 1e-4] {
+            let x = spheres[i].center + (spheres[i].radius + threshold - 1e-9) * dir;
+            let ignore = (q % 2 == 0).then_some(i as u32 ^ 1);
+            assert!(
+                naive::inside_any(&spheres, x, threshold, None),
+                "the query is meant to be within sphere {i}'s threshold"
+            );
+            check(&spheres, &tree, x, ignore);
+        }
+    }
+}
+
 #[test]
 fn batches_are_seeded_subsets_drawn_with_replacement() {
     let spheres = random_spheres(1000, 5, 0.1);
