@@ -211,12 +211,17 @@ impl SphereTree {
             .iter()
             .map(|s| SphereBox(to_obvhs(&s.aabb())))
             .collect();
-        // PLOC without reinsertion, leaves collapsed to at most 8 spheres. Reinsertion optimises the
-        // tree for ray traversal; for these containment queries it measured slower on 10^6 SDF
-        // spheres (fast_build: 5.0 s build, 37k inside_any queries/s; this: 1.0 s, 75k/s).
+        // PLOC without reinsertion. Reinsertion optimises the tree for ray traversal; for these
+        // containment queries it measured slower on 10^6 SDF spheres (fast_build: 5.0 s build,
+        // 37k inside_any queries/s; this: 1.0 s, 75k/s). Leaves of up to 64 spheres, collapsed
+        // at a traversal cost of 20 (against 8 and 3): a query near the surface, where every
+        // sphere nearly touches it, enters most nodes its bound cannot rule out, and a leaf's
+        // spheres in a row cost less than the nodes above them. The sphere queries' share of a
+        // run fell by a third to a half (adaptive bunny at 30,000 evaluations, the dev grids at
+        // N = 20 and 50, the 129^3 bunny; docs/speed.md, item 37).
         let params = BvhBuildParams {
-            max_prims_per_leaf: 8,
-            collapse_traversal_cost: 3.0,
+            max_prims_per_leaf: 64,
+            collapse_traversal_cost: 20.0,
             ..BvhBuildParams::fastest_build()
         };
         let ob = build_bvh2(&boxes, params, &mut Duration::default());

@@ -116,14 +116,48 @@ fn agrees_with_oracle_on_adversarial_sets() {
 }
 
 /// The nodes' bounds are `f32`: far from the origin their rounding is larger than the gap
-/// between a query's threshold and a sphere's signed distance. Spheres around (1000, -2000, 500)
-/// (an `f32` ulp there is 6e-5 to 1.2e-4), each queried at signed distance just below each
-/// threshold (by 1e-9) along a random direction: the tree must still find every one, as the
-/// oracle does. A bound rounded the wrong way prunes such spheres.
+/// between a query's threshold and a sphere's signed distance. Spheres of one radius around
+/// (1000, -2000, 500) (an `f32` ulp there is 6e-5 to 1.2e-4), queried from the sphere farthest
+/// along each axis, just beyond it along that axis, at signed distance 1e-9 below each
+/// threshold: every node that holds that sphere has it at its centre box's face, so its exact
+/// bound is 1e-9 below the threshold. The tree must still find it, as the oracle does; a bound
+/// rounded the wrong way prunes it. Then random directions from random spheres of random radii.
 #[test]
 fn agrees_with_oracle_where_f32_rounding_exceeds_the_margin() {
     let offset = DVec3::new(1000.0, -2000.0, 500.0);
     let mut rng = Rng::new(11);
+    for (n, seed) in [(40, 1), (3000, 2), (20000, 3)] {
+        let mut rng = Rng::new(seed);
+        let spheres: Vec<Sphere> = (0..n)
+            .map(|_| {
+                let c = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+                Sphere::new(offset + c, 0.01)
+            })
+            .collect();
+        let tree = SphereTree::new(&spheres);
+        for axis in [
+            DVec3::X,
+            DVec3::Y,
+            DVec3::Z,
+            -DVec3::X,
+            -DVec3::Y,
+            -DVec3::Z,
+        ] {
+            let far = (0..n)
+                .max_by(|&a, &b| {
+                    spheres[a]
+                        .center
+                        .dot(axis)
+                        .total_cmp(&spheres[b].center.dot(axis))
+                })
+                .expect("spheres");
+            for threshold in [-1e-4, 1e-4] {
+                let x = spheres[far].center + (0.01 + threshold - 1e-9) * axis;
+                assert!(naive::inside_any(&spheres, x, threshold, None));
+                check(&spheres, &tree, x, None);
+            }
+        }
+    }
     let spheres: Vec<Sphere> = (0..3000)
         .map(|_| {
             let c = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
@@ -142,10 +176,7 @@ fn agrees_with_oracle_where_f32_rounding_exceeds_the_margin() {
         for threshold in [-1e-4, 1e-4] {
             let x = spheres[i].center + (spheres[i].radius + threshold - 1e-9) * dir;
             let ignore = (q % 2 == 0).then_some(i as u32 ^ 1);
-            assert!(
-                naive::inside_any(&spheres, x, threshold, None),
-                "the query is meant to be within sphere {i}'s threshold"
-            );
+            assert!(naive::inside_any(&spheres, x, threshold, None));
             check(&spheres, &tree, x, ignore);
         }
     }
