@@ -237,9 +237,7 @@ impl SphereTree {
         leaf.link.spheres().filter(move |&s| {
             let p = self.packed[s];
             let d = (Vec3A::from_vec4(p) - leaf.x).length() - p.w - leaf.slack;
-            f64::from(d)
-                .partial_cmp(&threshold)
-                .is_none_or(std::cmp::Ordering::is_lt)
+            !(f64::from(d) >= threshold)
         })
     }
 
