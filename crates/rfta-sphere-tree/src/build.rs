@@ -167,17 +167,14 @@ fn narrow(wide: &[Wide]) -> (Vec<Bound>, Vec<Link>) {
 /// Building is `O(n log n)`. A query costs `O(log n)` node visits when few spheres come near the
 /// point, and grows with the number of spheres whose centre box and radius cannot be told apart
 /// from a containing one; see the crate documentation for why this is tighter than a box test.
-/// Memory is about 56 bytes per sphere once built: its centre and radius in `f64` and again in
-/// `f32`, its index, and a 72-byte node per 16 spheres or so (an SDF grid's spheres).
+/// Memory is about 75 bytes per sphere once built (a node of 72 bytes per two spheres, the
+/// spheres' centres, radii and indices).
 #[derive(Debug, Clone, Default)]
 pub struct SphereTree {
     pub(crate) bounds: Vec<Bound>,
     pub(crate) links: Vec<Link>,
     pub(crate) centers: Vec<DVec3>,
     pub(crate) radii: Vec<f64>,
-    /// Each sphere in `f32`, the centre and the radius (`w`): the leaves' first test, which rules
-    /// out most of their spheres before the exact one ([`crate::query`]).
-    pub(crate) packed: Vec<Vec4>,
     pub(crate) ids: Vec<u32>,
 }
 
@@ -235,13 +232,6 @@ impl SphereTree {
         (tree.bounds, tree.links) = narrow(&wide);
         tree.centers = order.iter().map(|&p| chosen[p as usize].center).collect();
         tree.radii = order.iter().map(|&p| chosen[p as usize].radius).collect();
-        tree.packed = order
-            .iter()
-            .map(|&p| {
-                let s = chosen[p as usize];
-                s.center.as_vec3().extend(s.radius as f32)
-            })
-            .collect();
         tree.ids = order.iter().map(|&p| ids[p as usize]).collect();
         tree
     }

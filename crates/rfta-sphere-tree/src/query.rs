@@ -52,10 +52,8 @@ impl SphereTree {
         let mut hit = false;
         self.traverse(x, |visit| match visit {
             Visit::Bound(lb) => lb < threshold,
-            Visit::Leaf(leaf) => {
-                hit = self
-                    .candidates(&leaf, threshold)
-                    .any(|s| self.exactly_below(s, x, threshold, ignore));
+            Visit::Leaf(node) => {
+                hit = self.leaf_hit(node, x, threshold, ignore);
                 !hit
             }
         });
@@ -93,8 +91,8 @@ impl SphereTree {
         self.traverse(x, |visit| match visit {
             // Once k hits are held, only spheres at least as deep as the k-th can still enter.
             Visit::Bound(lb) => lb < threshold && !(hits.len() == k && lb > hits[k - 1].0),
-            Visit::Leaf(leaf) => {
-                for s in self.candidates(&leaf, threshold) {
+            Visit::Leaf(node) => {
+                for s in node.spheres() {
                     let id = self.ids[s];
                     if Some(id) == ignore {
                         continue;
@@ -130,10 +128,13 @@ impl SphereTree {
         out.clear();
         self.traverse(x, |visit| match visit {
             Visit::Bound(lb) => lb < threshold,
-            Visit::Leaf(leaf) => {
+            Visit::Leaf(node) => {
                 out.extend(
-                    self.candidates(&leaf, threshold)
-                        .filter(|&s| self.exactly_below(s, x, threshold, ignore))
+                    node.spheres()
+                        .filter(|&s| {
+                            Some(self.ids[s]) != ignore
+                                && (x - self.centers[s]).length() - self.radii[s] < threshold
+                        })
                         .map(|s| self.ids[s]),
                 );
                 true
@@ -164,10 +165,7 @@ impl SphereTree {
             match link.children() {
                 Some(first) => stack.extend([first + 1, first]),
                 None => {
-                    if link
-                        .spheres()
-                        .any(|s| self.exactly_below(s, x, threshold, ignore))
-                    {
+                    if self.leaf_hit(link, x, threshold, ignore) {
                         return true;
                     }
                 }
@@ -177,20 +175,12 @@ impl SphereTree {
     }
 }
 
-/// A leaf the traversal entered, with what its spheres' first test needs: the query point in
-/// `f32` and the slack of the leaf's bound and of the point.
-struct Leaf {
-    link: Link,
-    x: Vec3A,
-    slack: f32,
-}
-
 /// What [`SphereTree::traverse`] asks its visitor about.
 enum Visit {
     /// A node whose spheres all have signed distance at least this: descend into it?
     Bound(f64),
     /// A leaf to examine: go on?
-    Leaf(Leaf),
+    Leaf(Link),
 }
 
 impl SphereTree {
@@ -212,12 +202,7 @@ impl SphereTree {
             match link.children() {
                 Some(first) => push_ordered(&mut stack, &self.bounds, first, &at),
                 None => {
-                    let leaf = Leaf {
-                        link,
-                        x: at.x,
-                        slack: self.bounds[idx as usize].slack() + at.slack,
-                    };
-                    if !visit(Visit::Leaf(leaf)) {
+                    if !visit(Visit::Leaf(link)) {
                         return;
                     }
                 }
@@ -225,26 +210,12 @@ impl SphereTree {
         }
     }
 
-    /// The spheres of `leaf` (positions in the arrays) that the `f32` test cannot rule out: those
-    /// with `|x - p| - r - slack < threshold` in `f32`, the slack covering the rounding as for
-    /// the nodes' bounds (a sphere lies in its leaf's boxes). A value that is not a number rules
-    /// nothing out.
-    fn candidates<'a>(
-        &'a self,
-        leaf: &'a Leaf,
-        threshold: f64,
-    ) -> impl Iterator<Item = usize> + 'a {
-        leaf.link.spheres().filter(move |&s| {
-            let p = self.packed[s];
-            let d = (Vec3A::from_vec4(p) - leaf.x).length() - p.w - leaf.slack;
-            !(f64::from(d) >= threshold)
+    /// Whether a sphere of leaf `node`, other than `ignore`, has signed distance below `threshold` at `x`.
+    fn leaf_hit(&self, node: Link, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
+        node.spheres().any(|s| {
+            Some(self.ids[s]) != ignore
+                && (x - self.centers[s]).length() - self.radii[s] < threshold
         })
-    }
-
-    /// Whether the sphere at position `s` of the arrays, unless it is `ignore`, has signed
-    /// distance below `threshold` at `x`, in `f64`.
-    fn exactly_below(&self, s: usize, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
-        Some(self.ids[s]) != ignore && (x - self.centers[s]).length() - self.radii[s] < threshold
     }
 }
 
