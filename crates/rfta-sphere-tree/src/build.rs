@@ -167,8 +167,8 @@ fn narrow(wide: &[Wide]) -> (Vec<Bound>, Vec<Link>) {
 /// Building is `O(n log n)`. A query costs `O(log n)` node visits when few spheres come near the
 /// point, and grows with the number of spheres whose centre box and radius cannot be told apart
 /// from a containing one; see the crate documentation for why this is tighter than a box test.
-/// Memory is about 75 bytes per sphere once built (a node of 72 bytes per two spheres, the
-/// spheres' centres, radii and indices).
+/// Memory is about 40 bytes per sphere once built: its centre, radius and index, and a 72-byte
+/// node per 16 spheres or so (an SDF grid's spheres).
 #[derive(Debug, Clone, Default)]
 pub struct SphereTree {
     pub(crate) bounds: Vec<Bound>,
