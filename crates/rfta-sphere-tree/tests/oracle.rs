@@ -45,6 +45,16 @@ fn check(spheres: &[Sphere], tree: &SphereTree, x: DVec3, ignore: Option<u32>) {
     }
 }
 
+/// A direction drawn from the cube's corners' box, normalised (x when it is zero).
+fn random_direction(rng: &mut Rng) -> DVec3 {
+    DVec3::new(
+        rng.next_f64() - 0.5,
+        rng.next_f64() - 0.5,
+        rng.next_f64() - 0.5,
+    )
+    .normalize_or(DVec3::X)
+}
+
 fn queries(spheres: &[Sphere], n: usize, seed: u64) -> Vec<(DVec3, Option<u32>)> {
     let mut rng = Rng::new(seed);
     (0..n)
@@ -59,12 +69,7 @@ fn queries(spheres: &[Sphere], n: usize, seed: u64) -> Vec<(DVec3, Option<u32>)>
             } else {
                 // On a sphere's surface, ignoring it: the reconstruction's query.
                 let i = rng.below(spheres.len() as u64) as usize;
-                let dir = DVec3::new(
-                    rng.next_f64() - 0.5,
-                    rng.next_f64() - 0.5,
-                    rng.next_f64() - 0.5,
-                )
-                .normalize_or(DVec3::X);
+                let dir = random_direction(&mut rng);
                 (spheres[i].center + spheres[i].radius * dir, Some(i as u32))
             }
         })
@@ -167,12 +172,7 @@ fn agrees_with_oracle_where_f32_rounding_exceeds_the_margin() {
     let tree = SphereTree::new(&spheres);
     for q in 0..400 {
         let i = rng.below(spheres.len() as u64) as usize;
-        let dir = DVec3::new(
-            rng.next_f64() - 0.5,
-            rng.next_f64() - 0.5,
-            rng.next_f64() - 0.5,
-        )
-        .normalize_or(DVec3::X);
+        let dir = random_direction(&mut rng);
         for threshold in [-1e-4, 1e-4] {
             let x = spheres[i].center + (spheres[i].radius + threshold - 1e-9) * dir;
             let ignore = (q % 2 == 0).then_some(i as u32 ^ 1);
