@@ -9,7 +9,7 @@ use rfta_geom::{Aabb, Sphere, glam::DVec3, glam::Vec3A, glam::Vec4};
 /// A node's bound as the queries read it: one 64-byte record (a cache line; 120 bytes in
 /// `f64`) in `f32`, rounded so that every bound it gives is at most the exact one (boxes outward,
 /// the radius up, and [`Bound::slack`] for the arithmetic's rounding). The leaves' tests stay
-/// exact in `f64`, so the answers are those of an `f64` tree; only the nodes within a millionth
+/// exact in `f64`, so the answers are those of an `f64` tree; only nodes within a few millionths
 /// of the coordinates' size of the threshold are entered in addition.
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
