@@ -1,8 +1,6 @@
 //! The queries: nearest-first traversals pruned by a signed-distance lower bound.
 
-use rfta_geom::glam::DVec3;
-
-use rfta_geom::glam::Vec3A;
+use rfta_geom::glam::{DVec3, Vec3A};
 
 use crate::build::{Bound, Link, SLACK, SphereTree};
 
