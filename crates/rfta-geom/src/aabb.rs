@@ -92,14 +92,7 @@ impl Aabb {
     /// The smallest `f32` box that holds this box: corners rounded outwards, for `f32`
     /// structures (GPU buffers, obvhs) that must stay conservative.
     pub fn to_f32_outward(&self) -> (glam::Vec3, glam::Vec3) {
-        let down = |x: f64| {
-            let f = x as f32;
-            if (f as f64) > x { f.next_down() } else { f }
-        };
-        let up = |x: f64| {
-            let f = x as f32;
-            if (f as f64) < x { f.next_up() } else { f }
-        };
+        use crate::math::{f32_at_least as up, f32_at_most as down};
         (
             glam::Vec3::new(down(self.min.x), down(self.min.y), down(self.min.z)),
             glam::Vec3::new(up(self.max.x), up(self.max.y), up(self.max.z)),

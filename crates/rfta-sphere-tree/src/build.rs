@@ -32,12 +32,7 @@ impl Bound {
     fn new(w: &Wide) -> Self {
         let (centers_min, centers_max) = w.centers.to_f32_outward();
         let (bounds_min, bounds_max) = w.bounds.to_f32_outward();
-        let r = w.max_radius as f32;
-        let max_radius = if (r as f64) < w.max_radius {
-            r.next_up()
-        } else {
-            r
-        };
+        let max_radius = rfta_geom::math::f32_at_least(w.max_radius);
         let scale = [centers_min, centers_max, bounds_min, bounds_max]
             .iter()
             .map(|v| v.abs().max_element())
