@@ -85,29 +85,33 @@ impl Bound {
     }
 }
 
-/// Where a node leads: an inner node's two children sit side by side at `a` and `a + 1` (their
-/// bounds, read together, are two adjacent cache lines); a leaf holds the `b & !LEAF` spheres
-/// from `a` of the tree's arrays.
+/// Where a node leads ([`Link::next`]): an inner node's two children sit side by side (their
+/// bounds, read together, are two adjacent cache lines); a leaf holds a range of spheres.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Link {
+    /// Inner: the first child; leaf: the first sphere.
     a: u32,
+    /// Inner: 0; leaf: the sphere count with [`LEAF`] set.
     b: u32,
 }
 
 /// The bit of [`Link`]'s `b` that marks a leaf.
 const LEAF: u32 = 1 << 31;
 
-impl Link {
-    /// The first child of an inner node (the second follows it); `None` for a leaf.
-    pub(crate) fn children(self) -> Option<u32> {
-        (self.b & LEAF == 0).then_some(self.a)
-    }
+/// What is below a node.
+pub(crate) enum Next {
+    /// The first of the two children (the second follows it).
+    Children(u32),
+    /// A leaf's spheres, as positions in the tree's arrays.
+    Spheres(std::ops::Range<usize>),
+}
 
-    /// A leaf's spheres, as positions in the tree's arrays (empty for an inner node).
-    pub(crate) fn spheres(self) -> std::ops::Range<usize> {
-        match self.children() {
-            Some(_) => 0..0,
-            None => self.a as usize..(self.a + (self.b & !LEAF)) as usize,
+impl Link {
+    pub(crate) fn next(self) -> Next {
+        if self.b & LEAF == 0 {
+            Next::Children(self.a)
+        } else {
+            Next::Spheres(self.a as usize..(self.a + (self.b & !LEAF)) as usize)
         }
     }
 }

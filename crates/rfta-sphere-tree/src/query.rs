@@ -2,7 +2,7 @@
 
 use rfta_geom::glam::{DVec3, Vec3A};
 
-use crate::build::{Bound, Link, SLACK, SphereTree};
+use crate::build::{Bound, Next, SLACK, SphereTree};
 
 /// Lower bound of `|x - p_j| - r_j` over the node's spheres: the larger of two bounds.
 ///
@@ -50,8 +50,8 @@ impl SphereTree {
         let mut hit = false;
         self.traverse(x, |visit| match visit {
             Visit::Bound(lb) => lb < threshold,
-            Visit::Leaf(node) => {
-                hit = self.leaf_hit(node, x, threshold, ignore);
+            Visit::Leaf(spheres) => {
+                hit = self.leaf_hit(spheres, x, threshold, ignore);
                 !hit
             }
         });
@@ -89,8 +89,8 @@ impl SphereTree {
         self.traverse(x, |visit| match visit {
             // Once k hits are held, only spheres at least as deep as the k-th can still enter.
             Visit::Bound(lb) => lb < threshold && !(hits.len() == k && lb > hits[k - 1].0),
-            Visit::Leaf(node) => {
-                for s in node.spheres() {
+            Visit::Leaf(spheres) => {
+                for s in spheres {
                     let id = self.ids[s];
                     if Some(id) == ignore {
                         continue;
@@ -126,9 +126,9 @@ impl SphereTree {
         out.clear();
         self.traverse(x, |visit| match visit {
             Visit::Bound(lb) => lb < threshold,
-            Visit::Leaf(node) => {
+            Visit::Leaf(spheres) => {
                 out.extend(
-                    node.spheres()
+                    spheres
                         .filter(|&s| {
                             Some(self.ids[s]) != ignore
                                 && (x - self.centers[s]).length() - self.radii[s] < threshold
@@ -159,11 +159,10 @@ impl SphereTree {
             if !self.bounds[idx as usize].bounds().padded(pad).contains(x) {
                 continue;
             }
-            let link = self.links[idx as usize];
-            match link.children() {
-                Some(first) => stack.extend([first + 1, first]),
-                None => {
-                    if self.leaf_hit(link, x, threshold, ignore) {
+            match self.links[idx as usize].next() {
+                Next::Children(first) => stack.extend([first + 1, first]),
+                Next::Spheres(spheres) => {
+                    if self.leaf_hit(spheres, x, threshold, ignore) {
                         return true;
                     }
                 }
@@ -178,14 +177,14 @@ enum Visit {
     /// A node whose spheres all have signed distance at least this: descend into it?
     Bound(f64),
     /// A leaf to examine: go on?
-    Leaf(Link),
+    Leaf(std::ops::Range<usize>),
 }
 
 impl SphereTree {
     /// Nearest-first traversal from `x`: `visit` decides, from each node's lower bound, whether
     /// to enter it, and examines each leaf entered; the traversal ends when it says to stop.
     fn traverse(&self, x: DVec3, mut visit: impl FnMut(Visit) -> bool) {
-        // A point that is not a number is in no sphere (every test is false).
+        // A point that is not finite is in no sphere (every exact test is false for it).
         if self.bounds.is_empty() || !x.is_finite() {
             return;
         }
@@ -196,11 +195,10 @@ impl SphereTree {
             if !visit(Visit::Bound(lb as f64)) {
                 continue;
             }
-            let link = self.links[idx as usize];
-            match link.children() {
-                Some(first) => push_ordered(&mut stack, &self.bounds, first, &at),
-                None => {
-                    if !visit(Visit::Leaf(link)) {
+            match self.links[idx as usize].next() {
+                Next::Children(first) => push_ordered(&mut stack, &self.bounds, first, &at),
+                Next::Spheres(spheres) => {
+                    if !visit(Visit::Leaf(spheres)) {
                         return;
                     }
                 }
@@ -208,9 +206,16 @@ impl SphereTree {
         }
     }
 
-    /// Whether a sphere of leaf `node`, other than `ignore`, has signed distance below `threshold` at `x`.
-    fn leaf_hit(&self, node: Link, x: DVec3, threshold: f64, ignore: Option<u32>) -> bool {
-        node.spheres().any(|s| {
+    /// Whether a sphere of a leaf's `spheres`, other than `ignore`, has signed distance below
+    /// `threshold` at `x`.
+    fn leaf_hit(
+        &self,
+        spheres: std::ops::Range<usize>,
+        x: DVec3,
+        threshold: f64,
+        ignore: Option<u32>,
+    ) -> bool {
+        spheres.into_iter().any(|s| {
             Some(self.ids[s]) != ignore
                 && (x - self.centers[s]).length() - self.radii[s] < threshold
         })

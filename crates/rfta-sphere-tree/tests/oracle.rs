@@ -130,12 +130,11 @@ fn agrees_with_oracle_on_adversarial_sets() {
 #[test]
 fn agrees_with_oracle_where_f32_rounding_exceeds_the_margin() {
     let offset = DVec3::new(1000.0, -2000.0, 500.0);
-    let mut rng = Rng::new(11);
     for (n, seed) in [(40, 1), (3000, 2), (20000, 3)] {
-        let mut rng = Rng::new(seed);
+        let mut draw = Rng::new(seed);
         let spheres: Vec<Sphere> = (0..n)
             .map(|_| {
-                let c = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+                let c = DVec3::new(draw.next_f64(), draw.next_f64(), draw.next_f64());
                 Sphere::new(offset + c, 0.01)
             })
             .collect();
@@ -163,6 +162,7 @@ fn agrees_with_oracle_where_f32_rounding_exceeds_the_margin() {
             }
         }
     }
+    let mut rng = Rng::new(11);
     let spheres: Vec<Sphere> = (0..3000)
         .map(|_| {
             let c = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
