@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
 use crate::flat::Leaves;
+use crate::keys::NONE;
 use crate::tree::{Frame, Level};
 
 /// A point in finest-depth integer coordinates.
@@ -60,26 +61,52 @@ impl Ctx<'_> {
     }
 
     /// Final value at a node of depth `d` (level coordinates).
-    fn value(&self, d: u32, c: [i64; 3]) -> Option<f64> {
+    fn value(&self, near: &Around, d: u32, c: [i64; 3]) -> Option<f64> {
+        if let Some(v) = near.value(d, c) {
+            return v;
+        }
         let node = self.levels[d as usize].node(c)?;
         Some(self.values[d as usize][node as usize])
     }
 
     /// Whether the extraction splits the depth-`d` cell `c` (a cell taken whole is a leaf).
-    fn refined_cell(&self, d: u32, c: [i64; 3]) -> bool {
+    fn refined_cell(&self, near: &Around, d: u32, c: [i64; 3]) -> bool {
+        if let Some(split) = near.split(d, c) {
+            return split;
+        }
         let level = &self.levels[d as usize];
         level.cell(c).is_some_and(|i| self.leaves.is_split(d, i))
     }
 
+    /// What the faces of leaf `ci` (depth `d`, level coordinates `c`) ask of their own depth.
+    fn around(&self, d: u32, ci: u32, c: [i64; 3]) -> Around {
+        let level = &self.levels[d as usize];
+        let vals = &self.values[d as usize];
+        let block = level.cell_index.block27(c);
+        Around {
+            d,
+            c,
+            split: block.map(|i| i != NONE && self.leaves.is_split(d, i)),
+            corners: level.corners[ci as usize].map(|n| vals.get(n as usize).copied()),
+        }
+    }
+
     /// Leaf corners strictly inside the depth-`d` edge from `start` along `axis`, ascending.
-    fn edge_points(&self, d: u32, start: [i64; 3], axis: usize, out: &mut Vec<BPoint>) -> bool {
+    fn edge_points(
+        &self,
+        near: &Around,
+        d: u32,
+        start: [i64; 3],
+        axis: usize,
+        out: &mut Vec<BPoint>,
+    ) -> bool {
         let (o1, o2) = ((axis + 1) % 3, (axis + 2) % 3);
         let mut split = false;
         for b in 0..4 {
             let mut k = start;
             k[o1] -= b & 1;
             k[o2] -= b >> 1;
-            if self.refined_cell(d, k) {
+            if self.refined_cell(near, d, k) {
                 split = true;
                 break;
             }
@@ -90,15 +117,45 @@ impl Ctx<'_> {
         let s2 = start.map(|v| 2 * v);
         let mut mid = s2;
         mid[axis] += 1;
-        let Some(v) = self.value(d + 1, mid) else {
+        let Some(v) = self.value(near, d + 1, mid) else {
             return false;
         };
-        let ok = self.edge_points(d + 1, s2, axis, out);
+        let ok = self.edge_points(near, d + 1, s2, axis, out);
         out.push(BPoint {
             q: self.finest(d + 1, mid),
             v,
         });
-        ok && self.edge_points(d + 1, mid, axis, out)
+        ok && self.edge_points(near, d + 1, mid, axis, out)
+    }
+}
+
+/// A leaf's neighbourhood at its own depth, looked up once for its six faces (each edge is on
+/// two of them and each corner on three): whether each cell of the 3x3x3 block around it is
+/// split, and the values at its corners (`None` where a corner is not a node).
+struct Around {
+    d: u32,
+    c: [i64; 3],
+    /// By `(x + 1) + 3 (y + 1) + 9 (z + 1)` (offsets from `c`), as `SparseIndex::block27`.
+    split: [bool; 27],
+    /// By `x + 2 y + 4 z`, as `tree::corner`.
+    corners: [Option<f64>; 8],
+}
+
+impl Around {
+    /// Whether depth-`d` cell `k` is split, if it is in the block.
+    #[inline]
+    fn split(&self, d: u32, k: [i64; 3]) -> Option<bool> {
+        let o = [k[0] - self.c[0], k[1] - self.c[1], k[2] - self.c[2]];
+        (d == self.d && o.iter().all(|v| (-1..=1).contains(v)))
+            .then(|| self.split[(o[0] + 1 + 3 * (o[1] + 1) + 9 * (o[2] + 1)) as usize])
+    }
+
+    /// The value at depth-`d` node `k` (`Some(None)`: not a node), if it is a corner of the leaf.
+    #[inline]
+    fn value(&self, d: u32, k: [i64; 3]) -> Option<Option<f64>> {
+        let o = [k[0] - self.c[0], k[1] - self.c[1], k[2] - self.c[2]];
+        (d == self.d && o.iter().all(|v| (0..=1).contains(v)))
+            .then(|| self.corners[(o[0] + 2 * o[1] + 4 * o[2]) as usize])
     }
 }
 
@@ -132,12 +189,12 @@ struct Patch {
 }
 
 impl Ctx<'_> {
-    fn vertex(&self, a: BPoint, b: BPoint, out: &mut LeafOut) -> u64 {
+    fn vertex(&self, near: &Around, a: BPoint, b: BPoint, out: &mut LeafOut) -> u64 {
         let (lo, hi) = if a.q <= b.q { (a, b) } else { (b, a) };
         let axis = (0..3).find(|&i| lo.q[i] != hi.q[i]).unwrap_or(0);
         let key = vkey(lo.q, axis);
         let (lo, hi) = if self.leaves.merged {
-            self.bracket(lo, hi, axis)
+            self.bracket(near, lo, hi, axis)
         } else {
             (lo, hi)
         };
@@ -152,7 +209,13 @@ impl Ctx<'_> {
     /// their values) in which the finer depths' nodes on it bracket the crossing: the edge halved
     /// while its middle is a node, keeping the half whose ends straddle the iso-value. An edge of
     /// a cell taken whole thereby gets the vertex the tree's own leaves would give it.
-    fn bracket(&self, mut lo: BPoint, mut hi: BPoint, axis: usize) -> (BPoint, BPoint) {
+    fn bracket(
+        &self,
+        near: &Around,
+        mut lo: BPoint,
+        mut hi: BPoint,
+        axis: usize,
+    ) -> (BPoint, BPoint) {
         let inside = |v: f64| v > self.iso;
         loop {
             // Edges run between corners of cells, so their lengths are powers of two.
@@ -164,7 +227,7 @@ impl Ctx<'_> {
             let s = self.depth - d;
             let mut q = lo.q;
             q[axis] += half;
-            let Some(v) = self.value(d, q.map(|v| i64::from(v >> s))) else {
+            let Some(v) = self.value(near, d, q.map(|v| i64::from(v >> s))) else {
                 return (lo, hi);
             };
             let mid = BPoint { q, v };
@@ -176,27 +239,27 @@ impl Ctx<'_> {
         }
     }
 
-    fn face(&self, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
+    fn face(&self, near: &Around, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
         let a = f / 2;
         let side = (f % 2) as i64;
         let n = 1i64 << d;
         let mut nb = c;
         nb[a] += 2 * side - 1;
-        if (0..n).contains(&nb[a]) && self.refined_cell(d, nb) {
+        if (0..n).contains(&nb[a]) && self.refined_cell(near, d, nb) {
             let (u, v) = ((a + 1) % 3, (a + 2) % 3);
             for s in 0..4 {
                 let mut cc = c.map(|x| 2 * x);
                 cc[a] += side;
                 cc[u] += s & 1;
                 cc[v] += s >> 1;
-                self.face(d + 1, cc, f, out);
+                self.face(near, d + 1, cc, f, out);
             }
         } else {
-            self.atomic_face(d, c, f, out);
+            self.atomic_face(near, d, c, f, out);
         }
     }
 
-    fn atomic_face(&self, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
+    fn atomic_face(&self, near: &Around, d: u32, c: [i64; 3], f: usize, out: &mut LeafOut) {
         let a = f / 2;
         let side = (f % 2) as i64;
         let (u, v) = ((a + 1) % 3, (a + 2) % 3);
@@ -220,7 +283,7 @@ impl Ctx<'_> {
             let (au, av) = order[e];
             let (bu, bv) = order[(e + 1) % 4];
             let ca = corner(au, av);
-            let Some(va) = self.value(d, ca) else {
+            let Some(va) = self.value(near, d, ca) else {
                 out.broken = true;
                 return;
             };
@@ -233,7 +296,7 @@ impl Ctx<'_> {
             let axis = if au != bu { u } else { v };
             let start = if ca[axis] < cb[axis] { ca } else { cb };
             scratch.clear();
-            if !self.edge_points(d, start, axis, &mut scratch) {
+            if !self.edge_points(near, d, start, axis, &mut scratch) {
                 out.broken = true;
                 return;
             }
@@ -249,7 +312,7 @@ impl Ctx<'_> {
         for k in 0..boundary.len() {
             let (p, q) = (boundary[k], boundary[(k + 1) % boundary.len()]);
             if inside(p.v) != inside(q.v) {
-                let key = self.vertex(p, q, out);
+                let key = self.vertex(near, p, q, out);
                 xs.push((key, !inside(p.v)));
             }
         }
@@ -438,8 +501,9 @@ impl Ctx<'_> {
         let level = &self.levels[d as usize];
         let c = crate::keys::demorton(level.cells[ci as usize]);
         let c = [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])];
+        let near = self.around(d, ci, c);
         for f in 0..6 {
-            self.face(d, c, f, out);
+            self.face(&near, d, c, f, out);
         }
         if out.segs.is_empty() {
             patch.verts.extend_from_slice(&out.verts);
