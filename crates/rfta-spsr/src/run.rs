@@ -66,14 +66,14 @@ impl Octree {
         )
     }
 
-    /// The levels rebuilt with `seeds` refined to the finest depth as the samples are; returns
-    /// the levels before.
-    fn refine_around(&mut self, seeds: &[glam::DVec3]) -> Vec<tree::Level> {
+    /// The levels rebuilt with `seeds` refined to the finest depth as the samples are. The levels
+    /// before are dropped first: what reads them later (the warm start's node indices, the first
+    /// solve's surface) was taken from them before.
+    fn refine_around(&mut self, seeds: &[glam::DVec3]) {
         let t = Instant::now();
-        let rebuilt = tree::build_levels(&self.samples, seeds, self.depth, self.base);
-        let before = std::mem::replace(&mut self.levels, rebuilt);
+        self.levels = Vec::new();
+        self.levels = tree::build_levels(&self.samples, seeds, self.depth, self.base);
         self.time += t.elapsed();
-        before
     }
 
     fn build(points: &OrientedPoints, params: &SpsrParams) -> Result<Self> {
@@ -123,16 +123,78 @@ impl Octree {
 }
 
 /// The solve's result before extraction: the solution and its iso-value, the first pass's (while
-/// side re-solves ran) with the octree it was solved on when the octree was refined since, the
-/// side points on the wrong side after each pass, and the time spent.
+/// side re-solves ran), the side points on the wrong side after each pass, and the time spent.
 struct Solved {
     sol: solve::Solution,
     iso: f64,
-    first: Option<(solve::Solution, f64)>,
-    first_levels: Option<Vec<tree::Level>>,
+    first: Option<FirstSolve>,
     side_errors: Vec<usize>,
     system_time: Duration,
     solve_time: Duration,
+    /// Spent extracting the first pass's surface before the octree was refined.
+    extract_time: Duration,
+}
+
+/// The first solve's result, kept while side re-solves run: a re-solve that pulls the surface
+/// out of the cube (where it would come out open) while the first solve's stayed inside is
+/// dropped for the first solve's surface.
+enum FirstSolve {
+    /// Its solution and iso-value, on the octree the re-solves use (not refined since).
+    Solution(solve::Solution, f64),
+    /// Its surface, extracted before side points refined the octree, so that the octree it was
+    /// solved on need not be kept beside the refined one through the re-solves, where the final
+    /// solve's memory peaks (docs/speed.md, item 39).
+    Surface(Surface),
+    /// Its surface reaches the cube's faces: nothing falls back to it.
+    Open,
+}
+
+/// An extracted surface `χ = iso`, in world coordinates.
+struct Surface {
+    mesh: TriMesh,
+    iso: f64,
+    broken_leaves: usize,
+    finest_cell: f64,
+}
+
+/// The surface `χ = iso` of the nodal `values` on `levels` (flat cells taken whole as `params`
+/// says), in world coordinates.
+fn surface(
+    levels: &[tree::Level],
+    values: &[Vec<f64>],
+    iso: f64,
+    params: &SpsrParams,
+    frame: &tree::Frame,
+) -> Surface {
+    let leaves = match params.flat_tolerance {
+        Some(t) => Leaves::merged(levels, values, iso, t / frame.side),
+        None => Leaves::of_tree(levels),
+    };
+    let mut ex = extract::extract(levels, values, iso, &leaves);
+    extract::to_world(frame, &mut ex.vertices);
+    Surface {
+        mesh: TriMesh {
+            vertices: ex.vertices,
+            faces: ex.faces,
+        },
+        iso,
+        broken_leaves: ex.broken_leaves,
+        finest_cell: frame.side / f64::from(1u32 << (levels.len() - 1)),
+    }
+}
+
+/// The first solve's surface on `levels`, if it stays inside the cube (else no re-solve's
+/// surface falls back to it).
+fn first_surface(
+    levels: &[tree::Level],
+    sol: &solve::Solution,
+    iso: f64,
+    params: &SpsrParams,
+    frame: &tree::Frame,
+) -> Option<Surface> {
+    let values = extract::final_values(levels, &sol.u);
+    (!extract::leaves_cube(levels, &values, iso))
+        .then(|| surface(levels, &values, iso, params, frame))
 }
 
 /// The solve, then while side points are on the wrong side (at most [`SIDE_PASSES`] times)
@@ -148,14 +210,13 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
     let mut sides = Sides::in_cube(sides, &frame);
     let mut system_time = t.elapsed();
     let mut solve_time = Duration::ZERO;
-    // The first solve's solution and iso-value, kept while re-solves run.
-    let mut first: Option<(solve::Solution, f64)> = None;
-    // Side points the octree was refined around, and its first version when it was.
+    // The first solve's result, kept while re-solves run.
+    let mut first: Option<FirstSolve> = None;
+    let mut extract_time = Duration::ZERO;
+    // Side points the octree was refined around.
     let mut seeds: Vec<glam::DVec3> = Vec::new();
-    let mut first_levels: Option<Vec<tree::Level>> = None;
-    // Whether the warm start's nodes are those of an octree rebuilt since.
-    let mut stale_nodes = false;
-    // A re-solve's start: the previous solve's coefficients on the same nodes.
+    // A re-solve's start: the previous solve's coefficients, on the octree's nodes or, after it
+    // was rebuilt, on those of the octree before.
     let mut resolve: Option<solve::WarmStart> = None;
     let resolve_params = SpsrParams {
         iterations: SIDE_RESOLVE_SWEEPS.min(params.iterations),
@@ -193,20 +254,14 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
         if last || wrong.is_empty() {
             break (sol, iso);
         }
-        // The octree stays (unless refined below): its node index is copied once, the
-        // coefficients each pass.
-        let start = resolve.get_or_insert_with(|| solve::WarmStart {
-            nodes: node_index(&octree.levels),
-            x: Vec::new(),
-        });
-        if std::mem::take(&mut stale_nodes) {
-            start.nodes = node_index(&octree.levels);
-        }
+        // This solve's coefficients lie on the octree's own nodes (unless it is refined below).
+        let start = resolve.get_or_insert_with(solve::WarmStart::default);
+        start.nodes = None;
         let coarse =
             sides.in_coarse_cells(&wrong, &octree.levels[octree.depth as usize], octree.depth);
         if first.is_none() {
             start.x = sol.x.clone();
-            first = Some((sol, iso));
+            first = Some(FirstSolve::Solution(sol, iso));
         } else {
             start.x = sol.x;
         }
@@ -218,12 +273,24 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
             // undo it. The octree is rebuilt with such points refined as the samples are; the
             // next solve starts from this one's coefficients on the nodes both octrees share.
             seeds.extend(coarse);
-            let first = octree.refine_around(&seeds);
-            first_levels.get_or_insert(first);
+            if let Some(FirstSolve::Solution(sol, iso)) = &first {
+                let t = Instant::now();
+                let taken = first_surface(&octree.levels, sol, *iso, params, &frame);
+                first = Some(taken.map_or(FirstSolve::Open, FirstSolve::Surface));
+                extract_time += t.elapsed();
+            }
+            // The old levels' node indices go with the coefficients; the rest of them is dropped.
+            start.nodes = Some(
+                octree
+                    .levels
+                    .iter_mut()
+                    .map(|l| std::mem::take(&mut l.node_index))
+                    .collect(),
+            );
+            octree.refine_around(&seeds);
             let t = Instant::now();
             v = solve::splat_normals(&octree.levels, &octree.samples);
             down = solve::down_pass(&octree.levels, &v);
-            stale_nodes = true;
             system_time += t.elapsed();
         }
     };
@@ -231,16 +298,11 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
         sol,
         iso,
         first,
-        first_levels,
         side_errors: sides.into_errors(),
         system_time,
         solve_time,
+        extract_time,
     }
-}
-
-/// Each level's node index (a re-solve's start on the same nodes).
-fn node_index(levels: &[tree::Level]) -> Vec<crate::keys::SparseIndex> {
-    levels.iter().map(|l| l.node_index.clone()).collect()
 }
 
 /// The surface of `solved` on the octree's levels (the first pass's, when a re-solve pulled it
@@ -262,64 +324,55 @@ fn extract_surface(
         sol,
         iso,
         first,
-        first_levels,
         mut side_errors,
         system_time,
         solve_time,
+        extract_time: first_extract_time,
     } = solved;
     let t3 = Instant::now();
     let solve::Solution { x, u } = sol;
-    let mut values = extract::final_values(&levels, &u);
+    let values = extract::final_values(&levels, &u);
     drop(u);
     drop(x);
-    let mut iso = iso;
     // A re-solve that pulls the surface out of the cube (where it would come out open) while the
     // first solve's stayed inside is dropped for the first solve's surface.
-    let mut on_first = false;
-    if let Some((sol, first_iso)) = first
-        && extract::leaves_cube(&levels, &values, iso)
-    {
-        let lv = first_levels.as_deref().unwrap_or(&levels);
-        let plain = extract::final_values(lv, &sol.u);
-        if !extract::leaves_cube(lv, &plain, first_iso) {
-            values = plain;
-            iso = first_iso;
+    let fallback = match first {
+        Some(first) if extract::leaves_cube(&levels, &values, iso) => match first {
+            FirstSolve::Solution(sol, first_iso) => {
+                first_surface(&levels, &sol, first_iso, params, &frame)
+            }
+            FirstSolve::Surface(surface) => Some(surface),
+            FirstSolve::Open => None,
+        },
+        _ => None,
+    };
+    let surface = match fallback {
+        Some(surface) => {
             side_errors.truncate(1);
-            on_first = true;
+            surface
         }
+        None => surface(&levels, &values, iso, params, &frame),
+    };
+    if surface.mesh.faces.is_empty() || !surface.iso.is_finite() {
+        return Err(Error::NoSurface { iso: surface.iso });
     }
-    let surface_levels = match &first_levels {
-        Some(lv) if on_first => lv,
-        _ => &levels,
-    };
-    let leaves = match params.flat_tolerance {
-        Some(t) => Leaves::merged(surface_levels, &values, iso, t / frame.side),
-        None => Leaves::of_tree(surface_levels),
-    };
-    let mut ex = extract::extract(surface_levels, &values, iso, &leaves);
-    let finest_cell = frame.side / f64::from(1u32 << (surface_levels.len() - 1));
-    if ex.faces.is_empty() || !iso.is_finite() {
-        return Err(Error::NoSurface { iso });
-    }
-    extract::to_world(&frame, &mut ex.vertices);
-    let extract_time = t3.elapsed();
-    let mesh = TriMesh {
-        vertices: ex.vertices,
-        faces: ex.faces,
-    };
+    let extract_time = first_extract_time + t3.elapsed();
     let report = SpsrReport {
         points: points.len(),
         samples: samples.len(),
         nodes_per_depth: levels.iter().map(|l| l.nodes.len()).collect(),
         cells_per_depth: levels.iter().map(|l| l.cells.len()).collect(),
-        iso_value: iso,
-        finest_cell,
+        iso_value: surface.iso,
+        finest_cell: surface.finest_cell,
         side_errors,
-        broken_leaves: ex.broken_leaves,
+        broken_leaves: surface.broken_leaves,
         tree_time,
         system_time,
         solve_time,
         extract_time,
     };
-    Ok(Reconstruction { mesh, report })
+    Ok(Reconstruction {
+        mesh: surface.mesh,
+        report,
+    })
 }

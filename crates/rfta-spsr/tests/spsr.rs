@@ -447,3 +447,38 @@ fn on<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
         .expect("a thread pool")
         .install(f)
 }
+
+/// A side point said to be inside, between the unit sphere and the cube's face (the cube is 1.1
+/// times the points' box): the re-solves that pull the surface out to it reach the face, where
+/// the mesh would come out open, so the result is the first solve's surface, the plain mesh,
+/// with the first pass's side error alone in the report. At depth 5 the octree is kept through
+/// the re-solves; at depth 7 the point's cell is a coarse one, the octree is rebuilt around it,
+/// and the first surface comes from the octree before.
+#[test]
+fn a_re_solve_that_reaches_the_cube_falls_back_to_the_first_surface() {
+    let (p, n, _) = sphere(6_000, 4);
+    let cloud = OrientedPoints::new(p, n, None).expect("cloud");
+    for (depth, z, refined) in [(5, 1.08, false), (7, 1.09, true)] {
+        let params = SpsrParams {
+            depth,
+            ..SpsrParams::default()
+        };
+        let plain = reconstruct(&cloud, &params).expect("plain");
+        let sides = [SidePoint {
+            position: DVec3::new(0.0, 0.0, z),
+            inside: true,
+        }];
+        let r = reconstruct_with_sides(&cloud, &sides, &params).expect("with sides");
+        assert_eq!(r.report.side_errors, vec![1], "depth {depth}");
+        assert_eq!(r.mesh.vertices, plain.mesh.vertices, "depth {depth}");
+        assert_eq!(r.mesh.faces, plain.mesh.faces, "depth {depth}");
+        assert_eq!(r.report.iso_value, plain.report.iso_value, "depth {depth}");
+        assert_eq!(
+            r.report.nodes_per_depth != plain.report.nodes_per_depth,
+            refined,
+            "depth {depth}: {:?} against {:?}",
+            r.report.nodes_per_depth,
+            plain.report.nodes_per_depth
+        );
+    }
+}

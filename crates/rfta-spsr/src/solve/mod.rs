@@ -62,12 +62,14 @@ struct DownTerms {
     parents: Option<Vec<u32>>,
 }
 
-/// A previous solution to start the relaxation from: per depth, its nodes and their
-/// coefficients `x_d` (each the correction on top of the coarser depths, so a node's value is
-/// a good guess wherever the cloud and the coarser solution changed little).
+/// A previous solution to start the relaxation from: per depth, its coefficients `x_d` (each
+/// the correction on top of the coarser depths, so a node's value is a good guess wherever the
+/// cloud and the coarser solution changed little) and, when they lie on another octree's nodes,
+/// that octree's node index per depth.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct WarmStart {
-    pub nodes: Vec<crate::keys::SparseIndex>,
+    /// `None`: `x` lies on the nodes of the levels solved on, in their order.
+    pub nodes: Option<Vec<crate::keys::SparseIndex>>,
     pub x: Vec<Vec<f64>>,
 }
 
@@ -75,10 +77,15 @@ impl WarmStart {
     /// The previous coefficients at this depth's nodes (0 at nodes that are new), if the previous
     /// solution reached this depth.
     fn start(&self, d: usize, level: &Level) -> Option<Vec<f64>> {
-        let (index, x) = (self.nodes.get(d)?, self.x.get(d)?);
+        let x = self.x.get(d)?;
         if x.is_empty() {
             return None;
         }
+        let Some(nodes) = &self.nodes else {
+            debug_assert_eq!(x.len(), level.nodes.len());
+            return Some(x.clone());
+        };
+        let index = nodes.get(d)?;
         Some(
             level
                 .nodes
