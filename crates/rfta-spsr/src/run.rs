@@ -159,7 +159,7 @@ struct Surface {
 
 /// The surface `χ = iso` of the nodal `values` on `levels` (flat cells taken whole as `params`
 /// says), in world coordinates.
-fn surface(
+fn surface_of(
     levels: &[tree::Level],
     values: &[Vec<f64>],
     iso: f64,
@@ -194,7 +194,7 @@ fn first_surface(
 ) -> Option<Surface> {
     let values = extract::final_values(levels, &sol.u);
     (!extract::leaves_cube(levels, &values, iso))
-        .then(|| surface(levels, &values, iso, params, frame))
+        .then(|| surface_of(levels, &values, iso, params, frame))
 }
 
 /// The solve, then while side points are on the wrong side (at most [`SIDE_PASSES`] times)
@@ -351,7 +351,7 @@ fn extract_surface(
             side_errors.truncate(1);
             surface
         }
-        None => surface(&levels, &values, iso, params, &frame),
+        None => surface_of(&levels, &values, iso, params, &frame),
     };
     if surface.mesh.faces.is_empty() || !surface.iso.is_finite() {
         return Err(Error::NoSurface { iso: surface.iso });
