@@ -273,21 +273,7 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
             // undo it. The octree is rebuilt with such points refined as the samples are; the
             // next solve starts from this one's coefficients on the nodes both octrees share.
             seeds.extend(coarse);
-            if let Some(FirstSolve::Solution(sol, iso)) = &first {
-                let t = Instant::now();
-                let taken = first_surface(&octree.levels, sol, *iso, params, &frame);
-                first = Some(taken.map_or(FirstSolve::Open, FirstSolve::Surface));
-                extract_time += t.elapsed();
-            }
-            // The old levels' node indices go with the coefficients; the rest of them is dropped.
-            start.nodes = Some(
-                octree
-                    .levels
-                    .iter_mut()
-                    .map(|l| std::mem::take(&mut l.node_index))
-                    .collect(),
-            );
-            octree.refine_around(&seeds);
+            extract_time += refine_for_sides(octree, &seeds, &mut first, start, params);
             let t = Instant::now();
             v = solve::splat_normals(&octree.levels, &octree.samples);
             down = solve::down_pass(&octree.levels, &v);
@@ -303,6 +289,34 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
         solve_time,
         extract_time,
     }
+}
+
+/// Rebuilds the octree around `seeds` (side points in coarse cells), first taking from the
+/// levels before what the re-solves still need of them: the first solve's surface (while
+/// `first` is its solution on these levels) and the node indices `start`'s coefficients lie on.
+/// Returns the time spent extracting.
+fn refine_for_sides(
+    octree: &mut Octree,
+    seeds: &[glam::DVec3],
+    first: &mut Option<FirstSolve>,
+    start: &mut solve::WarmStart,
+    params: &SpsrParams,
+) -> Duration {
+    let t = Instant::now();
+    if let Some(FirstSolve::Solution(sol, iso)) = first {
+        let taken = first_surface(&octree.levels, sol, *iso, params, &octree.frame);
+        *first = Some(taken.map_or(FirstSolve::Open, FirstSolve::Surface));
+    }
+    let extract_time = t.elapsed();
+    start.nodes = Some(
+        octree
+            .levels
+            .iter_mut()
+            .map(|l| std::mem::take(&mut l.node_index))
+            .collect(),
+    );
+    octree.refine_around(seeds);
+    extract_time
 }
 
 /// The surface of `solved` on the octree's levels (the first pass's, when a re-solve pulled it
