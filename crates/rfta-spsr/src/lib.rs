@@ -221,7 +221,8 @@ pub struct SpsrReport {
     pub system_time: Duration,
     /// Time of the multigrid solve and the iso-value.
     pub solve_time: Duration,
-    /// Time of the iso-surface extraction.
+    /// Time of the iso-surface extraction (with the first solve's, taken before side points
+    /// refined the octree, when they did).
     pub extract_time: Duration,
 }
 
