@@ -83,6 +83,50 @@ mod tests {
             assert_eq!(morton(child), parent * 8 + u64::from(c));
         }
     }
+
+    /// `block27` against 27 lookups, on random sparse sets indexed densely (extent 37, not a
+    /// multiple of the brick) and by hashing (extent 1500), at every point of the set, at points
+    /// next to it and at the edges of the extent.
+    #[test]
+    fn block27_is_the_27_lookups() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move |n: u32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % u64::from(n)) as u32
+        };
+        for (extent, count) in [(37u32, 4000usize), (1500, 20_000)] {
+            let span = if extent > 100 { 40 } else { extent };
+            let base = extent - span;
+            let mut coords: Vec<[u32; 3]> = (0..count)
+                .map(|_| [0; 3].map(|_| base + next(span)))
+                .collect();
+            coords.sort_by_key(|&c| morton(c));
+            coords.dedup();
+            let index = SparseIndex::new(coords.iter().copied(), extent, coords.len());
+            assert!(matches!(index.bricks, Bricks::Dense { .. }) == (extent < 100));
+            let e = i64::from(extent);
+            let mut probes: Vec<[i64; 3]> = coords
+                .iter()
+                .map(|c| [0, 1, 2].map(|a| i64::from(c[a]) + i64::from(next(3)) - 1))
+                .collect();
+            probes.extend([
+                [0, 0, 0],
+                [e - 1, e - 1, e - 1],
+                [e, 0, e - 1],
+                [-1, e - 8, 7],
+            ]);
+            for c in probes {
+                let mut want = [NONE; 27];
+                for (o, w) in want.iter_mut().enumerate() {
+                    let q = [0, 1, 2].map(|a| c[a] + [o % 3, o / 3 % 3, o / 9][a] as i64 - 1);
+                    *w = index.get(q).unwrap_or(NONE);
+                }
+                assert_eq!(index.block27(c), want, "around {c:?}");
+            }
+        }
+    }
 }
 
 /// Sentinel for an absent entry.
@@ -200,51 +244,38 @@ impl SparseIndex {
 
 impl SparseIndex {
     /// Indices of the 3x3x3 block around `c` (`NONE` where absent), in the order
-    /// `(x + 1) + 3 (y + 1) + 9 (z + 1)`: at most 8 brick probes instead of 27.
+    /// `(x + 1) + 3 (y + 1) + 9 (z + 1)`: one brick probe per brick the block overlaps (one for
+    /// most points, at most eight) instead of 27.
     pub(crate) fn block27(&self, c: [i64; 3]) -> [u32; 27] {
         let mut out = [NONE; 27];
-        // Per axis: validity, brick selector (0 or 1 relative to the first brick) and slot.
-        let mut valid = [[false; 3]; 3];
-        let mut sel = [[0usize; 3]; 3];
-        let mut local = [[0usize; 3]; 3];
-        let mut first = [0i64; 3];
-        for a in 0..3 {
-            first[a] = (c[a] - 1).div_euclid(8);
-            for k in 0..3 {
-                let q = c[a] + k as i64 - 1;
-                valid[a][k] = q >= 0 && q < self.extent;
-                sel[a][k] = (q.div_euclid(8) - first[a]) as usize;
-                local[a][k] = q.rem_euclid(8) as usize;
-            }
-        }
         let bricks_per_axis = (self.extent + 7) / 8;
-        let mut ids = [[[NONE; 2]; 2]; 2];
-        for z in 0..2 {
-            for y in 0..2 {
-                for x in 0..2 {
-                    let b = [
-                        first[0] + x as i64,
-                        first[1] + y as i64,
-                        first[2] + z as i64,
-                    ];
-                    if b.iter().all(|&v| v >= 0 && v < bricks_per_axis)
-                        && let Some(id) = self.bricks.get([b[0] as u32, b[1] as u32, b[2] as u32])
-                    {
-                        ids[z][y][x] = id;
-                    }
-                }
-            }
+        // Per axis: the brick holding `c - 1` with the offsets `k` (of `c + k - 1`) inside it,
+        // and the next brick with the rest (empty when the block stays in one brick). A brick
+        // outside the index holds nothing; points past the extent inside a brick are `NONE`.
+        let mut span = [[(0i64, 0usize, 0usize); 2]; 3];
+        for a in 0..3 {
+            let lo = (c[a] - 1).div_euclid(8);
+            let split = (lo * 8 + 9 - c[a]).min(3) as usize;
+            span[a] = [(lo, 0, split), (lo + 1, split, 3)];
         }
-        for kz in 0..3 {
-            for ky in 0..3 {
-                for kx in 0..3 {
-                    if !(valid[0][kx] && valid[1][ky] && valid[2][kz]) {
+        let used = |&&(b, k0, k1): &&(i64, usize, usize)| k0 < k1 && b >= 0 && b < bricks_per_axis;
+        for &(bz, z0, z1) in span[2].iter().filter(used) {
+            for &(by, y0, y1) in span[1].iter().filter(used) {
+                for &(bx, x0, x1) in span[0].iter().filter(used) {
+                    let Some(id) = self.bricks.get([bx as u32, by as u32, bz as u32]) else {
                         continue;
-                    }
-                    let b = ids[sel[2][kz]][sel[1][ky]][sel[0][kx]];
-                    if b != NONE {
-                        let sl = (local[2][kz] << 6) | (local[1][ky] << 3) | local[0][kx];
-                        out[kx + 3 * ky + 9 * kz] = self.slots[b as usize * 512 + sl];
+                    };
+                    let slots = &self.slots[id as usize * 512..id as usize * 512 + 512];
+                    let local = |a: usize, k: usize, b: i64| (c[a] + k as i64 - 1 - 8 * b) as usize;
+                    for kz in z0..z1 {
+                        for ky in y0..y1 {
+                            for kx in x0..x1 {
+                                let sl = (local(2, kz, bz) << 6)
+                                    | (local(1, ky, by) << 3)
+                                    | local(0, kx, bx);
+                                out[kx + 3 * ky + 9 * kz] = slots[sl];
+                            }
+                        }
                     }
                 }
             }
