@@ -47,10 +47,12 @@ fn ic(c: [u32; 3]) -> [i64; 3] {
 }
 
 mod relax;
+mod stencil;
 mod system;
 mod transfer;
 
 use relax::*;
+pub(crate) use stencil::*;
 pub(crate) use system::*;
 use transfer::*;
 
@@ -135,9 +137,14 @@ pub(crate) fn down_pass(levels: &[Level], v: &[Vec<DVec3>]) -> DownPass {
             if !small(d) {
                 return None;
             }
-            let nbr = neighbor_table(&levels[d]);
-            let g = apply_g(&levels[d], &AxisTables::new(d as u32), &nbr, &v[d]);
-            let parents = (d > 0).then(|| parent_table(&levels[d], &levels[d - 1]));
+            let nbr = Stencil::neighbours(&levels[d]).table();
+            let g = apply_g(
+                &levels[d],
+                &AxisTables::new(d as u32),
+                Stencil::Table(&nbr),
+                &v[d],
+            );
+            let parents = (d > 0).then(|| Stencil::parents(&levels[d], &levels[d - 1]).table());
             Some(DownTerms { nbr, g, parents })
         })
         .collect();
@@ -157,8 +164,9 @@ pub(crate) fn down_pass(levels: &[Level], v: &[Vec<DVec3>]) -> DownPass {
     let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
     for d in (0..=depth).rev() {
         let mut b = own_g[d].take().unwrap_or_else(|| {
-            let nbr = neighbor_table(&levels[d]);
-            apply_g(&levels[d], &AxisTables::new(d as u32), &nbr, &v[d])
+            let mut store = Vec::new();
+            let nbr = Stencil::neighbours(&levels[d]).or_table(None, &mut store);
+            apply_g(&levels[d], &AxisTables::new(d as u32), nbr, &v[d])
         });
         if d < depth {
             let r = restrict(&levels[d], &levels[d + 1], &beta[d + 1]);
@@ -188,16 +196,13 @@ pub(crate) fn solve(
         let sys = &systems[d];
         let mut rhs = down.beta[d].clone();
         // Coarser normal field and coarser solution, through exact parent-child integrals, and
-        // both prolonged to this depth (they do not depend on this depth's solution).
-        let (u_coarse, w_coarse) = if d > 0 {
-            let built;
-            let parents = match &down.parents[d] {
-                Some(p) => p,
-                None => {
-                    built = parent_table(level, &levels[d - 1]);
-                    &built
-                }
-            };
+        // both prolonged to this depth (they do not depend on this depth's solution). The normal
+        // field summed to this depth is needed by the next depth only: made before this depth's
+        // relaxation, so that the coarser one is dropped first, and not at the finest depth.
+        let u_coarse = if d > 0 {
+            let mut store = Vec::new();
+            let parents = Stencil::parents(level, &levels[d - 1])
+                .or_table(down.parents[d].as_ref(), &mut store);
             let u_prev = &us[d - 1];
             let corr: Vec<f64> = (0..level.nodes.len())
                 .into_par_iter()
@@ -205,7 +210,7 @@ pub(crate) fn solve(
                 .map(|i| {
                     let c = level.nodes[i];
                     let mut acc = 0.0;
-                    for_parents(sys, parents, i, c, |j, ax, ay, az| {
+                    for_parents(sys, parents.of(i), c, |j, ax, ay, az| {
                         let (k, g) = combine(ax, ay, az);
                         let w = w_prev[j as usize];
                         acc += g[0] * w.x + g[1] * w.y + g[2] * w.z - k * u_prev[j as usize];
@@ -214,15 +219,19 @@ pub(crate) fn solve(
                 })
                 .collect();
             rhs.iter_mut().zip(&corr).for_each(|(r, c)| *r += c);
-            (
-                prolong(level, parents, u_prev),
-                prolong(level, parents, &w_prev),
-            )
+            w_prev = if d < depth {
+                let mut w = prolong(level, parents, &w_prev);
+                w.iter_mut().zip(&v[d]).for_each(|(w, v)| *w += *v);
+                w
+            } else {
+                Vec::new()
+            };
+            prolong(level, parents, u_prev)
         } else {
-            (
-                vec![0.0; level.nodes.len()],
-                vec![DVec3::ZERO; level.nodes.len()],
-            )
+            let mut w = vec![DVec3::ZERO; level.nodes.len()];
+            w.iter_mut().zip(&v[d]).for_each(|(w, v)| *w += *v);
+            w_prev = w;
+            vec![0.0; level.nodes.len()]
         };
         // Screening toward the target, minus what the coarser solution already gives (that
         // value per screening cell in parallel, added to the right-hand side in order).
@@ -238,14 +247,8 @@ pub(crate) fn solve(
                 *r = 0.0;
             }
         }
-        let built;
-        let nbr = match &down.nbr[d] {
-            Some(n) => n,
-            None => {
-                built = neighbor_table(level);
-                &built
-            }
-        };
+        let mut store = Vec::new();
+        let nbr = Stencil::neighbours(level).or_table(down.nbr[d].as_ref(), &mut store);
         let x = if (d as u32) < base {
             conjugate_gradients(level, sys, nbr, &rhs, params.base_iterations, 1e-6)
         } else {
@@ -258,9 +261,6 @@ pub(crate) fn solve(
         };
         let mut u = u_coarse;
         u.iter_mut().zip(&x).for_each(|(u, x)| *u += x);
-        let mut w = w_coarse;
-        w.iter_mut().zip(&v[d]).for_each(|(w, v)| *w += *v);
-        w_prev = w;
         xs.push(x);
         us.push(u);
     }

@@ -3,10 +3,6 @@
 
 use super::*;
 
-/// Depths with at most this many nodes keep their index tables in the [`DownPass`], shared by
-/// every [`solve`] on the octree instead of built per solve.
-pub(super) const KEEP_TABLES_BELOW: usize = 1 << 17;
-
 /// Below this many nodes a depth's conjugate-gradient loop runs on one thread: the coarse grids
 /// are small and a parallel pass over them costs more in scheduling than in arithmetic. Every sum
 /// is taken in the same fixed chunks either way, so the result does not change.
@@ -16,7 +12,7 @@ pub(super) const SERIAL_BELOW: usize = 8 * CHUNK;
 pub(super) fn apply_a(
     level: &Level,
     sys: &LevelSystem,
-    nbr: &[u32],
+    nbr: Stencil,
     x: &[f64],
     fs: &mut Vec<f64>,
     out: &mut [f64],
@@ -44,8 +40,7 @@ pub(super) fn apply_a(
         }
         let c = level.nodes[i];
         let mut acc = 0.0;
-        for o in 0..27 {
-            let j = nbr[i * 27 + o];
+        for (o, j) in nbr.of(i).into_iter().enumerate() {
             if j != NONE && !sys.fixed[j as usize] {
                 acc += sys.k(c, o, n) * x[j as usize];
             }
@@ -93,7 +88,7 @@ pub(super) fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
 pub(super) fn conjugate_gradients(
     level: &Level,
     sys: &LevelSystem,
-    nbr: &[u32],
+    nbr: Stencil,
     r0: &[f64],
     iters: usize,
     tol: f64,
@@ -157,7 +152,7 @@ pub(super) fn k_row(sys: &LevelSystem, c: [u32; 3], n: u32) -> [f64; 27] {
 pub(super) fn gauss_seidel(
     level: &Level,
     sys: &LevelSystem,
-    nbr: &[u32],
+    nbr: Stencil,
     r: &[f64],
     x: &mut [f64],
     sweeps: usize,
@@ -193,10 +188,8 @@ pub(super) fn gauss_seidel(
                         0.0
                     } else {
                         let row = k_row(sys, level.nodes[i], n);
-                        let nb = &nbr[i * 27..i * 27 + 27];
                         let mut acc = 0.0;
-                        for o in 0..27 {
-                            let j = nb[o];
+                        for (o, j) in nbr.of(i).into_iter().enumerate() {
                             if o != 13 && j != NONE {
                                 acc += row[o] * at(j as usize);
                             }

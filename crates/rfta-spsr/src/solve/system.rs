@@ -1,5 +1,5 @@
 //! Each depth's system: the screening cells and value constraints, the stiffness and mass
-//! tables, the neighbour and parent tables, and the splatted normal field's divergence.
+//! tables, and the splatted normal field's divergence.
 
 use super::*;
 
@@ -191,36 +191,6 @@ fn screening_cells(
     screen
 }
 
-/// 27 neighbour node indices per node (`NONE` when absent), in [`offset`] order. Built for one
-/// depth at a time and dropped after use: it is the largest per-node array.
-pub(crate) fn neighbor_table(level: &Level) -> Vec<u32> {
-    // Collected into place: no serial fill of the table first.
-    level
-        .nodes
-        .par_iter()
-        .with_min_len(GRAIN)
-        .map(|&c| level.node_index.block27(ic(c)))
-        .collect::<Vec<[u32; 27]>>()
-        .into_flattened()
-}
-
-/// 27 node indices one depth coarser per node: hat `(c >> 1) + o - 1` per axis.
-pub(crate) fn parent_table(fine: &Level, coarse: &Level) -> Vec<u32> {
-    fine.nodes
-        .par_iter()
-        .with_min_len(GRAIN)
-        .map(|&c| {
-            let p = [
-                i64::from(c[0] >> 1),
-                i64::from(c[1] >> 1),
-                i64::from(c[2] >> 1),
-            ];
-            coarse.node_index.block27(p)
-        })
-        .collect::<Vec<[u32; 27]>>()
-        .into_flattened()
-}
-
 /// Splat the (inward) normal field: each sample's area-weighted normal goes to the hats of the two
 /// depths bracketing its fractional depth, linearly weighted. Returns per depth the coefficients
 /// of `V` in that depth's hat basis (divided by the cell volume so that `V` integrates to the
@@ -296,7 +266,7 @@ pub(crate) fn quadratic_bspline(t: f64) -> f64 {
 }
 
 /// `∫ ∇B_i · V_d` for every node of a depth, `V_d` given by same-depth coefficients.
-pub(super) fn apply_g(level: &Level, tables: &AxisTables, nbr: &[u32], v: &[DVec3]) -> Vec<f64> {
+pub(super) fn apply_g(level: &Level, tables: &AxisTables, nbr: Stencil, v: &[DVec3]) -> Vec<f64> {
     let t = &tables.same;
     (0..level.nodes.len())
         .into_par_iter()
@@ -304,8 +274,7 @@ pub(super) fn apply_g(level: &Level, tables: &AxisTables, nbr: &[u32], v: &[DVec
         .map(|i| {
             let c = level.nodes[i];
             let mut acc = 0.0;
-            for o in 0..27 {
-                let j = nbr[i * 27 + o];
+            for (o, j) in nbr.of(i).into_iter().enumerate() {
                 if j == NONE {
                     continue;
                 }

@@ -112,7 +112,7 @@ fn restriction_is_the_ordered_scatter() -> Result<(), Box<dyn std::error::Error>
                 if v < -0.3 { 0.0 } else { v }
             })
             .collect();
-        let parents = parent_table(fine, coarse);
+        let parents = Stencil::parents(fine, coarse).table();
         let mut want = vec![0.0; coarse.nodes.len()];
         for (i, &b) in beta.iter().enumerate() {
             let (ps, m) = prolongation_parents(fine.nodes[i]);

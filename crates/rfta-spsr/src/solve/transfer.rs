@@ -4,17 +4,15 @@
 use super::*;
 
 /// Calls `f(parent node, [mass, stiffness, mixed] per axis)` for every active node one depth
-/// coarser whose hat overlaps the hat of fine node `i` (coordinates `c`).
+/// coarser whose hat overlaps the hat of the fine node at `c` (its 27 parents `par`).
 #[inline]
 pub(super) fn for_parents(
     sys: &LevelSystem,
-    parents: &[u32],
-    i: usize,
+    par: [u32; 27],
     c: [u32; 3],
     mut f: impl FnMut(u32, &[f64; 3], &[f64; 3], &[f64; 3]),
 ) {
     let p = &sys.tables.parent;
-    let par = &parents[i * 27..i * 27 + 27];
     for oz in 0..3usize {
         let az = &p[c[2] as usize][oz];
         if az[0] == 0.0 && az[2] == 0.0 {
@@ -66,7 +64,7 @@ pub(super) fn prolongation_parents(c: [u32; 3]) -> ([(usize, f64); 8], usize) {
 }
 
 /// Values of a coarser depth's nodal function at this depth's nodes (exact: the hat spaces nest).
-pub(super) fn prolong<T>(fine: &Level, parents: &[u32], u: &[T]) -> Vec<T>
+pub(super) fn prolong<T>(fine: &Level, parents: Stencil, u: &[T]) -> Vec<T>
 where
     T: Copy + Send + Sync + Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
 {
@@ -75,9 +73,10 @@ where
         .with_min_len(GRAIN)
         .map(|i| {
             let (ps, m) = prolongation_parents(fine.nodes[i]);
+            let par = parents.of(i);
             let mut acc = T::default();
             for &(slot, w) in &ps[..m] {
-                let j = parents[i * 27 + slot];
+                let j = par[slot];
                 if j != NONE {
                     acc = acc + u[j as usize] * w;
                 }
