@@ -164,8 +164,8 @@ pub(crate) fn down_pass(levels: &[Level], v: &[Vec<DVec3>]) -> DownPass {
     let mut beta: Vec<Vec<f64>> = vec![Vec::new(); depth + 1];
     for d in (0..=depth).rev() {
         let mut b = own_g[d].take().unwrap_or_else(|| {
-            let mut store = Vec::new();
-            let nbr = Stencil::neighbours(&levels[d]).or_table(None, &mut store);
+            // Read once per node: looked up, no table.
+            let nbr = Stencil::neighbours(&levels[d]);
             apply_g(&levels[d], &AxisTables::new(d as u32), nbr, &v[d])
         });
         if d < depth {
