@@ -11,7 +11,7 @@ pub(super) const KEEP_TABLES_BELOW: usize = 1 << 17;
 
 /// Depths with more nodes than this build no tables: their stencils are looked up when asked.
 /// A table costs 108 bytes a node (113 MB here): on the 257^3 bunny the final solve's depth-12
-/// tables (over 2 million nodes) took its peak from 1,958 to 2,251 MB. A lookup reads one brick
+/// tables (over 2 million nodes) made its peak 2,198 MB against 1,912 MB with lookups. A lookup reads one brick
 /// of the index for most nodes, but from memory instead of a streamed table, and the relaxation
 /// asks for every node in each sweep: that run's solves took about 3.5 s more of its 90. The
 /// 129^3 bunny's finest depth (685,000 nodes) keeps its tables: 60 MB less at the peak for
