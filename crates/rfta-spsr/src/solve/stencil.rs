@@ -10,12 +10,12 @@ use crate::keys::SparseIndex;
 pub(super) const KEEP_TABLES_BELOW: usize = 1 << 17;
 
 /// Depths with more nodes than this build no tables: their stencils are looked up when asked.
-/// A table costs 108 bytes a node (113 MB here): on the 257^3 bunny the final solve's depth-12
-/// tables (over 2 million nodes) made its peak 2,198 MB against 1,912 MB with lookups. A lookup reads one brick
-/// of the index for most nodes, but from memory instead of a streamed table, and the relaxation
-/// asks for every node in each sweep: that run's solves took about 3.5 s more of its 90. The
-/// 129^3 bunny's finest depth (685,000 nodes) keeps its tables: 60 MB less at the peak for
-/// 0.5 to 0.9 s more.
+/// A table costs 108 bytes a node (113 MB here). On the 257^3 bunny the final solve's depth 12
+/// (over 2 million nodes) peaked at 2,198 MB with tables and 1,912 MB with lookups (KiB / 1024).
+/// A lookup reads one brick of the index for most nodes, but from memory instead of a streamed
+/// table, and the relaxation asks for every node in each sweep: that run's solves took about
+/// 3.5 s more of its 90. The 129^3 bunny's finest depth (685,000 nodes) keeps its tables:
+/// lookups there would save 60 MB of heap at the peak for 0.5 to 0.9 s.
 const LOOKUP_ABOVE: usize = 1 << 20;
 
 /// Per node of a depth, 27 node indices (`NONE` where absent) of the block around a point, in

@@ -236,7 +236,7 @@ fn default_runs(rows: &[(String, usize, String, usize, Result<Run>)], n: usize) 
 }
 
 /// The speed issue's targets ([`TARGETS`]) beside the default preset's runs on 2 threads at each N
-/// this run has: mean wall time per shape and the largest peak memory, and which of the two are met.
+/// this run has: mean wall time per shape and the largest peak memory, and which of them are met.
 fn targets(
     s: &mut String,
     rows: &[(String, usize, String, usize, Result<Run>)],
