@@ -71,7 +71,7 @@ impl Octree {
     /// solve's surface) was taken from them before.
     fn refine_around(&mut self, seeds: &[glam::DVec3]) {
         let t = Instant::now();
-        self.levels = Vec::new();
+        drop(std::mem::take(&mut self.levels));
         self.levels = tree::build_levels(&self.samples, seeds, self.depth, self.base);
         self.time += t.elapsed();
     }

@@ -67,29 +67,34 @@ impl<'a> Stencil<'a> {
         }
     }
 
-    /// Every node's indices as one table (27 per node).
-    pub(crate) fn table(self) -> Vec<u32> {
+    /// How many nodes the stencil serves.
+    fn len(self) -> usize {
         match self {
-            Stencil::Table(t) => t.to_vec(),
-            Stencil::Lookup { nodes, .. } => (0..nodes.len())
-                .into_par_iter()
-                .with_min_len(GRAIN)
-                .map(|i| self.of(i))
-                .collect::<Vec<[u32; 27]>>()
-                .into_flattened(),
+            Stencil::Table(t) => t.len() / 27,
+            Stencil::Lookup { nodes, .. } => nodes.len(),
         }
     }
 
+    /// Every node's indices as one table (27 per node).
+    pub(crate) fn table(self) -> Vec<u32> {
+        (0..self.len())
+            .into_par_iter()
+            .with_min_len(GRAIN)
+            .map(|i| self.of(i))
+            .collect::<Vec<[u32; 27]>>()
+            .into_flattened()
+    }
+
     /// The stencil a solve uses: the `kept` table if there is one, else a table built into
-    /// `store` on a depth of at most [`LOOKUP_ABOVE`] nodes, else this lookup.
+    /// `store` on a depth of at most [`LOOKUP_ABOVE`] nodes, else this stencil as it is.
     pub(crate) fn or_table(self, kept: Option<&'a Vec<u32>>, store: &'a mut Vec<u32>) -> Self {
-        match (kept, self) {
-            (Some(t), _) => Stencil::Table(t),
-            (None, Stencil::Lookup { nodes, .. }) if nodes.len() <= LOOKUP_ABOVE => {
+        match kept {
+            Some(t) => Stencil::Table(t),
+            None if self.len() <= LOOKUP_ABOVE => {
                 *store = self.table();
                 Stencil::Table(store)
             }
-            (None, s) => s,
+            None => self,
         }
     }
 }

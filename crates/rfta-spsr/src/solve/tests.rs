@@ -95,6 +95,39 @@ fn a_seed_is_refined_to_the_finest_depth() -> Result<(), Box<dyn std::error::Err
     Ok(())
 }
 
+/// Both stencils, looked up and as tables, are the single node lookups around each node: its
+/// neighbours `c + o - 1` on its own depth, its parents `c / 2 + o - 1` one depth coarser.
+#[test]
+fn stencils_are_the_node_lookups_around_each_node() -> Result<(), Box<dyn std::error::Error>> {
+    let (_, _, levels, _) = thin_tree()?;
+    let around = |level: &Level, c: [i64; 3]| -> [u32; 27] {
+        std::array::from_fn(|o| {
+            let off = offset(o);
+            level
+                .node([c[0] + off[0], c[1] + off[1], c[2] + off[2]])
+                .unwrap_or(NONE)
+        })
+    };
+    for d in 0..levels.len() {
+        let level = &levels[d];
+        let neighbours = Stencil::neighbours(level);
+        let table = neighbours.table();
+        let parents = (d > 0).then(|| Stencil::parents(level, &levels[d - 1]));
+        let parent_table = parents.map(Stencil::table);
+        for (i, &c) in level.nodes.iter().enumerate() {
+            let want = around(level, ic(c));
+            assert_eq!(neighbours.of(i), want, "depth {d} node {c:?}");
+            assert_eq!(Stencil::Table(&table).of(i), want);
+            if let (Some(p), Some(t)) = (parents, &parent_table) {
+                let want = around(&levels[d - 1], ic(c.map(|v| v / 2)));
+                assert_eq!(p.of(i), want, "depth {d} node {c:?}");
+                assert_eq!(Stencil::Table(t).of(i), want);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The parallel restriction (each coarse node gathering) equals, bit for bit, scattering the
 /// fine nodes in order to their prolongation parents, at every depth.
 #[test]
