@@ -41,7 +41,7 @@ use rfta_geom::kernels::{
     SphereSphere, closest_point_on_circle, fallback_perpendicular, project_onto_sphere,
     sphere_sphere_circle, transport_on_sphere, trilaterate,
 };
-use rfta_geom::{Sphere, TriMesh};
+use rfta_geom::{Sphere, SphereSet, TriMesh};
 use rfta_mesh::MeshIndex;
 use rfta_sphere_tree::SphereTree;
 
@@ -242,13 +242,13 @@ pub fn resolve(s: &Sphere, x: DVec3, cands: &[Sphere]) -> DVec3 {
 /// `local_search_iters` moves, each resolving the up to `k_search` spheres that (nearly) contain
 /// it. `None` when it is still inside another sphere by more than `tol` after the last move.
 pub fn local_search(
-    spheres: &[Sphere],
+    spheres: &(impl SphereSet + ?Sized),
     tree: &SphereTree,
     i: u32,
     mut x: DVec3,
     params: &Params,
 ) -> Option<DVec3> {
-    let s = params.owner(spheres[i as usize]);
+    let s = params.owner(spheres.sphere(i as usize));
     let mut buf = Vec::new();
     let mut cands: Vec<(f64, u32)> = Vec::new();
     let mut list: Vec<Sphere> = Vec::new();
@@ -265,10 +265,10 @@ pub fn local_search(
         buf.truncate(params.k_search);
         // Candidates by radius, ascending (ties by index), as the reference sorts them.
         cands.clear();
-        cands.extend(buf.iter().map(|&(_, j)| (spheres[j as usize].radius, j)));
+        cands.extend(buf.iter().map(|&(_, j)| (spheres.radius(j as usize), j)));
         cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         list.clear();
-        list.extend(cands.iter().map(|&(_, j)| spheres[j as usize]));
+        list.extend(cands.iter().map(|&(_, j)| spheres.sphere(j as usize)));
         x = resolve(&s, x, &list);
     }
     None
@@ -297,7 +297,7 @@ impl Transported {
 /// result lies inside no other sphere of `tree` (at most `halvings` times); `q` if none works.
 /// `near` is scratch (a caller transporting many points passes the same one).
 pub fn transport(
-    spheres: &[Sphere],
+    spheres: &(impl SphereSet + ?Sized),
     tree: &SphereTree,
     i: u32,
     a: DVec3,
@@ -305,7 +305,7 @@ pub fn transport(
     params: &Params,
     near: &mut Vec<u32>,
 ) -> Transported {
-    let s = params.owner(spheres[i as usize]);
+    let s = params.owner(spheres.sphere(i as usize));
     let tol = params.tol;
     if (a - q).length() < tol || s.radius < tol || (a - s.center).length() < tol {
         return Transported::Unchecked(a);
@@ -323,7 +323,7 @@ pub fn transport(
         let y = transport_on_sphere(&s, a, q, arc);
         if !near
             .iter()
-            .any(|&j| spheres[j as usize].signed_distance(y) < -tol)
+            .any(|&j| spheres.sphere(j as usize).signed_distance(y) < -tol)
         {
             return Transported::Feasible(y);
         }
@@ -339,7 +339,7 @@ pub fn transport(
 /// normal) get no point. With `done`, 1 is added to it as each sphere of `set` is finished (for
 /// progress reports from another thread; the result does not depend on it).
 pub fn initial_points(
-    spheres: &[Sphere],
+    spheres: &(impl SphereSet + ?Sized),
     values: &[f64],
     set: &[u32],
     empty_space: &[DVec3],
@@ -358,10 +358,10 @@ pub fn initial_points(
         .par_iter()
         .with_max_len(SPHERES_PER_TASK)
         .map(|&i| {
-            let s = params.owner(spheres[i as usize]);
+            let s = params.owner(spheres.sphere(i as usize));
             let v = values[i as usize];
             // Owners are chosen by their radius as constraints, the caller's measure.
-            if spheres[i as usize].radius >= params.owner_radius || s.radius <= 0.0 {
+            if spheres.radius(i as usize) >= params.owner_radius || s.radius <= 0.0 {
                 return Vec::new();
             }
             let nn = kd
@@ -411,7 +411,7 @@ pub enum Tested {
 /// finished (for progress reports from another thread; the result does not depend on it).
 #[allow(clippy::too_many_arguments)]
 pub fn fine_tune(
-    spheres: &[Sphere],
+    spheres: &(impl SphereSet + ?Sized),
     values: &[f64],
     mesh: &TriMesh,
     cloud: &TangentPoints,
@@ -428,8 +428,8 @@ pub fn fine_tune(
     // work (on a 257^3 grid 99% of the spheres), without a slot each.
     let owners: Vec<u32> = (0..spheres.len() as u32)
         .filter(|&i| {
-            let s = spheres[i as usize];
-            s.radius < params.owner_radius && params.owner(s).radius > 0.0
+            let r = spheres.radius(i as usize);
+            r < params.owner_radius && r * params.owner_scale > 0.0
         })
         .collect();
     if let Some(done) = done {
@@ -473,8 +473,8 @@ fn nearest(points: &[DVec3], range: std::ops::Range<usize>, q: DVec3) -> usize {
 
 /// What one fine-tuning round reads, shared by every sphere's rule.
 #[derive(Clone, Copy)]
-struct Round<'a> {
-    spheres: &'a [Sphere],
+struct Round<'a, S: SphereSet + ?Sized> {
+    spheres: &'a S,
     values: &'a [f64],
     index: &'a MeshIndex,
     /// Sorted by owner.
@@ -484,7 +484,7 @@ struct Round<'a> {
     cloud_feasible: bool,
 }
 
-impl Round<'_> {
+impl<S: SphereSet + ?Sized> Round<'_, S> {
     /// Owner `i`'s points after the round, with their normals: the cut / miss / tangent rule.
     fn sphere(&self, i: u32) -> Vec<(DVec3, DVec3)> {
         let Round {
@@ -497,7 +497,7 @@ impl Round<'_> {
             cloud_feasible,
         } = *self;
         let tol = params.tol;
-        let s = params.owner(spheres[i as usize]);
+        let s = params.owner(spheres.sphere(i as usize));
         let v = values[i as usize];
         // An owner (`fine_tune` passes no other): below the owner radius, of positive radius.
         let r = s.radius;

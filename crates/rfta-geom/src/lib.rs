@@ -56,7 +56,7 @@ pub use error::Error;
 pub use mesh::TriMesh;
 pub use points::OrientedPoints;
 pub use sdf::{Grid, Layout, SdfSamples, SignBalance};
-pub use sphere::Sphere;
+pub use sphere::{Sphere, SphereSet};
 
 /// Shorthand for results whose error is this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

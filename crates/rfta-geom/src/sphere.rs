@@ -38,3 +38,53 @@ impl Sphere {
         Aabb::new(self.center - r, self.center + r)
     }
 }
+
+/// Spheres read by index: a slice of them, or a set that works each one out when asked (an SDF
+/// grid's spheres from its values, without 32 bytes a sample for a copy).
+pub trait SphereSet: Sync {
+    /// The number of spheres.
+    fn len(&self) -> usize;
+
+    /// Sphere `i`, for `i < self.len()` (a caller bug otherwise: it may panic).
+    fn sphere(&self, i: usize) -> Sphere;
+
+    /// The radius of sphere `i` alone (a set that works spheres out may find it sooner).
+    fn radius(&self, i: usize) -> f64 {
+        self.sphere(i).radius
+    }
+
+    /// Whether the set holds no sphere.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl SphereSet for [Sphere] {
+    fn len(&self) -> usize {
+        <[Sphere]>::len(self)
+    }
+
+    fn sphere(&self, i: usize) -> Sphere {
+        self[i]
+    }
+}
+
+impl SphereSet for Vec<Sphere> {
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+
+    fn sphere(&self, i: usize) -> Sphere {
+        self[i]
+    }
+}
+
+impl<const N: usize> SphereSet for [Sphere; N] {
+    fn len(&self) -> usize {
+        N
+    }
+
+    fn sphere(&self, i: usize) -> Sphere {
+        self[i]
+    }
+}

@@ -68,7 +68,7 @@ pub fn cavity_openings(mesh: &TriMesh, spheres: &Spheres<'_>, grid: &Grid) -> Op
                 .map(|index| (index, part.bounds()))
         })
         .collect();
-    let centre = |i: usize| spheres.frame.to_mesh(spheres.spheres[i].center);
+    let centre = |i: usize| spheres.frame.to_mesh(spheres.spheres.sphere(i).center);
     let outside = |i: usize| spheres.values[i] > 0.0;
     let in_wall = |w: usize, p: DVec3| {
         parts[w]
@@ -193,7 +193,7 @@ fn neighbours(grid: &Grid, i: usize) -> [Option<usize>; 6] {
 /// covers, or, where they overlap, the point that divides the segment as their radii do (frame
 /// coordinates).
 fn gap_point(spheres: &Spheres<'_>, i: usize, j: usize, t: f64) -> DVec3 {
-    let (a, b) = (spheres.spheres[i], spheres.spheres[j]);
+    let (a, b) = (spheres.spheres.sphere(i), spheres.spheres.sphere(j));
     let along = b.center - a.center;
     let length = along.length();
     if length == 0.0 {

@@ -38,7 +38,7 @@ pub fn push_out_of_spheres(
                 let Some(&(_, j)) = hits.first() else {
                     break;
                 };
-                let s = spheres.spheres[j as usize];
+                let s = spheres.spheres.sphere(j as usize);
                 let dir = (p - s.center).normalize_or_zero();
                 if dir == DVec3::ZERO {
                     break;
@@ -119,7 +119,7 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
         let mut inside: Vec<u32> = found
             .par_iter()
             .flat_map_iter(|&(i, ref c)| {
-                let s = spheres.spheres[i as usize];
+                let s = spheres.spheres.sphere(i as usize);
                 let holds =
                     |v: u32| (part.vertices[v as usize] - s.center).length() < s.radius - depth;
                 cap(&part, &incident, c.face, holds)
@@ -141,7 +141,8 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
                     .map(|&f| part.face_normal_scaled(f as usize))
                     .sum();
                 let along = n.normalize_or_zero() * if positive { -1.0 } else { 1.0 };
-                let radial = (p - spheres.spheres[deepest as usize].center).normalize_or_zero();
+                let radial =
+                    (p - spheres.spheres.sphere(deepest as usize).center).normalize_or_zero();
                 let start = std::mem::take(hits);
                 [along, radial]
                     .into_iter()
@@ -181,7 +182,7 @@ fn entered(
 ) -> Option<Vec<(u32, rfta_mesh::ClosestPoint)>> {
     use rayon::prelude::*;
     let entry = |i: u32| {
-        let s = spheres.spheres[i as usize];
+        let s = spheres.spheres.sphere(i as usize);
         let lo = s.radius - depth;
         (lo > 0.0).then_some((s.center, lo))
     };
@@ -190,7 +191,7 @@ fn entered(
             let index = rfta_mesh::MeshIndex::new(part).ok()?;
             (0..spheres.spheres.len() as u32)
                 .into_par_iter()
-                .filter(|&i| spheres.spheres[i as usize].radius < below)
+                .filter(|&i| spheres.spheres.radius(i as usize) < below)
                 .filter_map(|i| {
                     let (c, lo) = entry(i)?;
                     Some((i, index.closest_point_within(c, lo * lo)?))
@@ -288,7 +289,7 @@ fn split_where_entered(
     let mut added = 0;
     for &(i, ref c) in found {
         let f = c.face as usize;
-        let s = spheres.spheres[i as usize];
+        let s = spheres.spheres.sphere(i as usize);
         // A face split in this call holds a new vertex, which `part` does not have.
         let holds = |v: u32| {
             part.vertices
@@ -328,7 +329,7 @@ fn leave_along(
             if (spheres.values[j as usize] > 0.0) != positive {
                 return None;
             }
-            let s = spheres.spheres[j as usize];
+            let s = spheres.spheres.sphere(j as usize);
             let o = p - s.center;
             let b = o.dot(dir);
             let disc = b * b - (o.length_squared() - s.radius * s.radius);

@@ -43,7 +43,7 @@ pub mod edit;
 mod genus;
 mod tunnel;
 
-use rfta_geom::Sphere;
+use rfta_geom::SphereSet;
 use rfta_geom::glam::DVec3;
 
 pub use cavities::{Openings, cavity_openings};
@@ -83,10 +83,10 @@ impl Frame {
 }
 
 /// Sample spheres to repair a mesh against.
-#[derive(Debug, Clone, Copy)]
+#[derive(Clone, Copy)]
 pub struct Spheres<'a> {
     /// Centres and radii `|s_i|`, in the frame.
-    pub spheres: &'a [Sphere],
+    pub spheres: &'a dyn SphereSet,
     /// The samples' values (negative inside), one per sphere: their signs say which side of the
     /// surface each sphere lies on.
     pub values: &'a [f64],
@@ -94,4 +94,15 @@ pub struct Spheres<'a> {
     pub frame: Frame,
     /// The sample spacing, in the frame: how far a vertex may move ([`clear_spheres`]).
     pub spacing: f64,
+}
+
+impl std::fmt::Debug for Spheres<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Spheres")
+            .field("spheres", &self.spheres.len())
+            .field("values", &self.values.len())
+            .field("frame", &self.frame)
+            .field("spacing", &self.spacing)
+            .finish()
+    }
 }

@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use obvhs::{BvhBuildParams, aabb::Aabb as ObAabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
-use rfta_geom::{Aabb, Sphere, glam::DVec3, glam::Vec3A, glam::Vec4};
+use rfta_geom::{Aabb, Sphere, SphereSet, glam::DVec3, glam::Vec3A, glam::Vec4};
 
 /// A node's bound as the queries read it: one 64-byte record (a cache line; 120 bytes in
 /// `f64`) in `f32`, rounded so that every bound it gives is at most the exact one (boxes outward,
@@ -187,14 +187,14 @@ impl obvhs::Boundable for SphereBox {
 
 impl SphereTree {
     /// A tree over all `spheres`, reporting indices into `spheres`.
-    pub fn new(spheres: &[Sphere]) -> Self {
+    pub fn new(spheres: &(impl SphereSet + ?Sized)) -> Self {
         let ids: Vec<u32> = (0..spheres.len() as u32).collect();
         Self::with_indices(spheres, &ids)
     }
 
     /// A tree over `spheres[i]` for each `i` in `indices` (duplicates are kept once), reporting
     /// those indices. Indices out of range are skipped.
-    pub fn with_indices(spheres: &[Sphere], indices: &[u32]) -> Self {
+    pub fn with_indices(spheres: &(impl SphereSet + ?Sized), indices: &[u32]) -> Self {
         let mut ids: Vec<u32> = indices
             .iter()
             .copied()
@@ -202,7 +202,7 @@ impl SphereTree {
             .collect();
         ids.sort_unstable();
         ids.dedup();
-        let chosen: Vec<Sphere> = ids.iter().map(|&i| spheres[i as usize]).collect();
+        let chosen: Vec<Sphere> = ids.iter().map(|&i| spheres.sphere(i as usize)).collect();
         if chosen.is_empty() {
             return Self::default();
         }
@@ -238,7 +238,7 @@ impl SphereTree {
     /// A tree over a random batch: `batch_size` indices drawn uniformly *with replacement* from
     /// `0..spheres.len()` with `seed` ([`rfta_geom::rng::batch_with_replacement`]). A batch size
     /// of 0, or one of at least `n`, takes all.
-    pub fn batch(spheres: &[Sphere], batch_size: usize, seed: u64) -> Self {
+    pub fn batch(spheres: &(impl SphereSet + ?Sized), batch_size: usize, seed: u64) -> Self {
         match rfta_geom::rng::batch_with_replacement(spheres.len(), batch_size, seed) {
             Some(ids) => Self::with_indices(spheres, &ids),
             None => Self::new(spheres),

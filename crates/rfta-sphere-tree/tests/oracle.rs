@@ -206,7 +206,7 @@ fn batches_are_seeded_subsets_drawn_with_replacement() {
 
 #[test]
 fn empty_tree_answers_nothing() {
-    let tree = SphereTree::new(&[]);
+    let tree = SphereTree::new(&[] as &[Sphere]);
     assert!(tree.is_empty());
     assert!(!tree.inside_any(DVec3::ZERO, 1.0, None));
     assert!(

@@ -44,7 +44,7 @@
 use rayon::prelude::*;
 use rfta_feasible::TangentPoints;
 use rfta_geom::glam::DVec3;
-use rfta_geom::{CubicField, SdfSamples};
+use rfta_geom::{CubicField, SdfSamples, SphereSet};
 use rfta_sphere_tree::SphereTree;
 use serde::{Deserialize, Serialize};
 
@@ -296,11 +296,11 @@ pub(crate) fn cover_check(
         return;
     }
     let values = samples.values();
-    let spheres = &unit.spheres;
+    let spheres = unit;
     let asked = |i: u32| asked.is_none_or(|a| a[i as usize]);
     let owners: Vec<u32> = (0..spheres.len() as u32)
         .filter(|&i| {
-            let r = spheres[i as usize].radius;
+            let r = spheres.radius(i as usize);
             r > 0.0 && r < owner_radius && asked(i)
         })
         .collect();
@@ -308,7 +308,7 @@ pub(crate) fn cover_check(
         return;
     }
     let near: Vec<u32> = (0..spheres.len() as u32)
-        .filter(|&i| spheres[i as usize].radius < reach_radius && asked(i))
+        .filter(|&i| spheres.radius(i as usize) < reach_radius && asked(i))
         .collect();
     let tree = SphereTree::with_indices(spheres, &near);
     let params = &rfta_feasible::Params {
@@ -362,13 +362,13 @@ pub(crate) fn cover_check(
 /// Whether the paper's local search finds a point on sphere `i` outside every sphere of `tree`:
 /// from the side `toward` first, then from each of `STARTS`.
 fn uncovered_point(
-    spheres: &[rfta_geom::Sphere],
+    spheres: &UnitBox,
     tree: &SphereTree,
     i: u32,
     toward: DVec3,
     params: &rfta_feasible::Params,
 ) -> bool {
-    let s = params.owner(spheres[i as usize]);
+    let s = params.owner(spheres.sphere(i as usize));
     std::iter::once(toward)
         .chain(STARTS.iter().map(|d| DVec3::from_array(*d).normalize()))
         .any(|d| {

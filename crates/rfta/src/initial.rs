@@ -6,6 +6,7 @@
 use std::time::Instant;
 
 use rfta_feasible::TangentPoints;
+use rfta_geom::SphereSet;
 use rfta_geom::glam::DVec3;
 use rfta_sphere_tree::SphereTree;
 
@@ -79,7 +80,7 @@ fn on_zero_set(
 fn feasible_seeds(plan: &Plan<'_>, seeds: &TangentPoints) -> TangentPoints {
     use rayon::prelude::*;
     let unit = &plan.unit;
-    let all = SphereTree::new(&unit.spheres);
+    let all = SphereTree::new(unit);
     let kept: Vec<usize> = (0..seeds.len())
         .into_par_iter()
         .filter(|&k| {
@@ -133,7 +134,7 @@ fn drawing(
     report.seeded = seeds.as_ref().map_or(0, TangentPoints::len);
     let mut parts: Vec<TangentPoints> = seeds.into_iter().collect();
     let mut raster_time = std::time::Duration::ZERO;
-    let drawn = |i: usize| unit.spheres[i].radius < reach;
+    let drawn = |i: usize| unit.radius(i) < reach;
     for (negative, set) in [(false, &pos), (true, &neg)] {
         let unseeded: std::borrow::Cow<[u32]> = match &seeded {
             None => set.as_slice().into(),
@@ -167,11 +168,11 @@ fn drawing(
                 Seeds(params.seed).initial_batch(negative),
             ),
         };
-        let tree = SphereTree::with_indices(&unit.spheres, &batch);
+        let tree = SphereTree::with_indices(unit, &batch);
         crate::pool::waiters_back();
         parts.push(counted(unseeded.len(), progress, |done| {
             rfta_feasible::initial_points(
-                &unit.spheres,
+                unit,
                 values,
                 &unseeded,
                 &empty_points,
@@ -246,14 +247,14 @@ fn empty_space(
     report: &mut InitialReport,
 ) -> Result<Vec<DVec3>> {
     let (unit, params) = (&plan.unit, &plan.params);
-    let drawn = |i: usize| unit.spheres[i].radius < reach;
+    let drawn = |i: usize| unit.radius(i) < reach;
     let from_gradient = match params.initial {
         crate::InitialPoints::Gradient => unit
-            .gradient_points(set, |i| drawn(i) && unit.spheres[i].radius < unit.clamp)
+            .gradient_points(set, |i| drawn(i) && unit.radius(i) < unit.clamp)
             .map(|points| {
                 // Empty space: the points outside every drawn sphere of the set.
                 let all = SphereTree::with_indices(
-                    &unit.spheres,
+                    unit,
                     &draw.iter().map(|&i| i as u32).collect::<Vec<_>>(),
                 );
                 let tol = params.tolerance;
@@ -272,8 +273,8 @@ fn empty_space(
         report.raster_resolution = 0;
         return Ok(points);
     }
-    let c: Vec<DVec3> = draw.iter().map(|&i| unit.spheres[i].center).collect();
-    let r: Vec<f64> = draw.iter().map(|&i| unit.spheres[i].radius).collect();
+    let c: Vec<DVec3> = draw.iter().map(|&i| unit.center(i)).collect();
+    let r: Vec<f64> = draw.iter().map(|&i| unit.radius(i)).collect();
     let raster = params.raster_params(params.raster_resolution_for(unit.len()), negative);
     let backend = if params.gpu {
         rfta_raster::Backend::Gpu
@@ -378,7 +379,7 @@ mod tests {
         let plan = raster_plan(&samples);
         let unit = &plan.unit;
         let reach = plan.raster_radius;
-        let undrawn = unit.spheres.iter().filter(|s| s.radius >= reach).count();
+        let undrawn = unit.spheres().filter(|s| s.radius >= reach).count();
         assert!(undrawn * 4 > unit.len(), "{undrawn} of {}", unit.len());
         let run = |reach: f64| {
             drawing(&plan, None, reach, &mut Journal::default(), &mut |_| {})
@@ -455,11 +456,11 @@ mod tests {
         // whose owner is past the samples.
         let k = 0;
         let other = (0..unit.len())
-            .max_by(|&a, &b| unit.spheres[a].radius.total_cmp(&unit.spheres[b].radius))
+            .max_by(|&a, &b| unit.radius(a).total_cmp(&unit.radius(b)))
             .expect("samples");
-        assert!(unit.spheres[other].radius > 0.1);
+        assert!(unit.radius(other) > 0.1);
         let mut bad = seeds.clone();
-        bad.points[k] = unit.to_input(unit.spheres[other].center);
+        bad.points[k] = unit.to_input(unit.center(other));
         bad.owners.push(unit.len() as u32);
         bad.points.push(seeds.points[1]);
         bad.normals.push(seeds.normals[1]);

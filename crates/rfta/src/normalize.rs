@@ -2,7 +2,7 @@
 
 use rfta_feasible::TangentPoints;
 use rfta_geom::glam::DVec3;
-use rfta_geom::{Grid, SdfSamples, Sphere};
+use rfta_geom::{Grid, SdfSamples, Sphere, SphereSet};
 
 /// The side points of the final solve ([`UnitBox::sides`]): index `i` below the sample count is
 /// sample `i` when its value is beyond the margin, the rest are the extra points.
@@ -22,7 +22,7 @@ impl rfta_spsr::SideSet for SampleSides<'_> {
             return self.extra.get(i - self.unit.len()).copied();
         };
         (v.abs() > self.margin).then(|| rfta_spsr::SidePoint {
-            position: self.unit.spheres[i].center,
+            position: self.unit.center(i),
             inside: v < 0.0,
         })
     }
@@ -38,8 +38,9 @@ pub(crate) struct UnitBox {
     upper: DVec3,
     /// Signed values, scaled.
     pub(crate) values: Vec<f64>,
-    /// Spheres of radius `radius_scale |s|`, or the clamp for clamped samples (`|s| >= clamp`).
-    pub(crate) spheres: Vec<Sphere>,
+    /// Where the spheres' centres come from ([`SphereSet`]: the spheres are worked out as they
+    /// are read, from the centres and the values).
+    centers: Centers,
     /// The clamp, scaled (`+inf` when none).
     pub(crate) clamp: f64,
     /// The sample spacing in the samples' coordinates ([`sample_spacing`]).
@@ -65,26 +66,18 @@ impl UnitBox {
         let values: Vec<f64> = samples.values().iter().map(|&s| s / scale).collect();
         let cap = clamp.map_or(f64::INFINITY, |c| c / scale);
         let shrink = radius_scale.unwrap_or(1.0);
-        // A clamped sample keeps the clamp as its radius (it owns no point); the others shrink.
-        let spheres = (0..n)
-            .map(|i| {
-                let s = values[i];
-                Sphere::new(
-                    (samples.position(i) - trans) / scale,
-                    if s.abs() >= cap {
-                        cap
-                    } else {
-                        shrink * s.abs()
-                    },
-                )
-            })
-            .collect();
+        let centers = match samples.layout() {
+            rfta_geom::Layout::Grid(g) => Centers::Grid(*g),
+            rfta_geom::Layout::Scattered(p) => {
+                Centers::Points(p.iter().map(|&p| (p - trans) / scale).collect())
+            }
+        };
         Self {
             trans,
             scale,
             upper: hi,
             values,
-            spheres,
+            centers,
             clamp: cap,
             input_spacing: samples.spacing(),
             grid: samples.as_grid().and_then(|g| {
@@ -102,7 +95,20 @@ impl UnitBox {
 
     /// Number of samples.
     pub(crate) fn len(&self) -> usize {
-        self.spheres.len()
+        self.values.len()
+    }
+
+    /// Sample `i`'s sphere centre: its position in the unit box.
+    pub(crate) fn center(&self, i: usize) -> DVec3 {
+        match &self.centers {
+            Centers::Grid(g) => (g.position(i) - self.trans) / self.scale,
+            Centers::Points(p) => p[i],
+        }
+    }
+
+    /// Every sample's sphere, in index order.
+    pub(crate) fn spheres(&self) -> impl Iterator<Item = Sphere> + '_ {
+        (0..self.len()).map(|i| self.sphere(i))
     }
 
     /// The map from the samples' coordinates into the unit box.
@@ -116,7 +122,7 @@ impl UnitBox {
     /// The spheres as repair takes them: in the unit box, with the way there.
     pub(crate) fn sphere_set(&self) -> rfta_repair::Spheres<'_> {
         rfta_repair::Spheres {
-            spheres: &self.spheres,
+            spheres: self,
             values: &self.values,
             frame: self.frame(),
             spacing: self.spacing(),
@@ -181,7 +187,7 @@ impl UnitBox {
             .filter_map(|i| {
                 let grad = g.central_difference(&self.values, i);
                 let len = grad.length();
-                (len > 1e-12).then(|| self.spheres[i].center - self.values[i] * grad / len)
+                (len > 1e-12).then(|| self.center(i) - self.values[i] * grad / len)
             })
             .collect();
         Some(points)
@@ -208,7 +214,7 @@ impl UnitBox {
         (0..self.len() as u32)
             .into_par_iter()
             .filter(|&i| {
-                let s = self.spheres[i as usize];
+                let s = self.sphere(i as usize);
                 let reach = s.radius + margin + pad;
                 s.center.clamp(lo, hi).distance_squared(s.center) < reach * reach
             })
@@ -226,7 +232,7 @@ impl UnitBox {
         let lo = self.to_unit(bounds.min);
         let hi = self.to_unit(bounds.max);
         let inside = |i: &usize| {
-            let c = self.spheres[*i].center;
+            let c = self.center(*i);
             c.cmpge(lo).all() && c.cmple(hi).all()
         };
         let Some(g) = &self.grid else {
@@ -253,6 +259,36 @@ impl UnitBox {
     /// The sample spacing in the unit box.
     pub(crate) fn spacing(&self) -> f64 {
         self.input_spacing / self.scale
+    }
+}
+
+/// Where the samples' sphere centres come from.
+enum Centers {
+    /// The input grid (in the samples' coordinates): a centre is its node moved into the unit
+    /// box, worked out when read (on a 513^3 grid a copy of the centres would be 3.2 GB).
+    Grid(Grid),
+    /// Scattered samples' positions, in the unit box.
+    Points(Vec<DVec3>),
+}
+
+/// Sample `i` as a sphere in the unit box: radius `radius_scale |s|`, or the clamp for a clamped
+/// sample (`|s| >= clamp`: it owns no point).
+impl SphereSet for UnitBox {
+    fn len(&self) -> usize {
+        UnitBox::len(self)
+    }
+
+    fn sphere(&self, i: usize) -> Sphere {
+        Sphere::new(self.center(i), self.radius(i))
+    }
+
+    fn radius(&self, i: usize) -> f64 {
+        let s = self.values[i].abs();
+        if s >= self.clamp {
+            self.clamp
+        } else {
+            self.shrink * s
+        }
     }
 }
 
@@ -302,6 +338,44 @@ mod tests {
     use super::*;
     use rfta_geom::{Aabb, Grid};
 
+    /// A sample's sphere is its position moved into the unit box (less the box's corner, over
+    /// its largest side) with radius `shrink |s|` scaled the same way, or the clamp when `|s|`
+    /// reaches it; worked out from the grid, it is the one the same samples give scattered, to
+    /// the bit.
+    #[test]
+    fn spheres_are_the_samples_in_the_unit_box() {
+        // Sides 2 * 0.25, 6 * 0.5 = 3 (the largest) and 4 * 0.125: the box's corner at the
+        // origin, the scale 3.
+        let origin = DVec3::new(-1.0, 0.5, 2.0);
+        let grid = Grid::new([3, 7, 5], origin, DVec3::new(0.25, 0.5, 0.125)).expect("grid");
+        let values: Vec<f64> = (0..grid.len()).map(|i| (i as f64 - 50.0) * 0.02).collect();
+        let on_grid = SdfSamples::grid(grid, values.clone()).expect("samples");
+        let scattered =
+            SdfSamples::scattered(on_grid.positions(), values.clone()).expect("samples");
+        let (clamp, shrink) = (0.9, 0.75);
+        let a = UnitBox::new(&on_grid, Some(clamp), Some(shrink));
+        let b = UnitBox::new(&scattered, Some(clamp), Some(shrink));
+        assert_eq!((SphereSet::len(&a), SphereSet::len(&b)), (105, 105));
+        let (mut clamped, mut shrunk) = (0, 0);
+        for (i, &v) in values.iter().enumerate() {
+            let want_center = (grid.position(i) - origin) / 3.0;
+            let want_radius = if v.abs() >= clamp {
+                clamped += 1;
+                clamp / 3.0
+            } else {
+                shrunk += 1;
+                shrink * (v / 3.0).abs()
+            };
+            let s = a.sphere(i);
+            assert!((s.center - want_center).abs().max_element() < 1e-15, "{i}");
+            assert!((s.radius - want_radius).abs() < 1e-15, "{i}: {}", s.radius);
+            assert_eq!(s.radius, a.radius(i));
+            assert_eq!(s, b.sphere(i), "sample {i}: grid and scattered differ");
+        }
+        assert!(clamped > 10 && shrunk > 10, "{clamped} {shrunk}");
+        assert_eq!(a.spheres().count(), 105);
+    }
+
     /// The grid's shortcut finds exactly the samples a scan over all of them finds, for boxes
     /// inside, across and beyond the grid.
     #[test]
@@ -326,7 +400,7 @@ mod tests {
             ]);
             let scan: Vec<usize> = (0..samples.len())
                 .filter(|&i| {
-                    let c = unit.spheres[i].center;
+                    let c = unit.center(i);
                     c.cmpge(unit.to_unit(bounds.min)).all()
                         && c.cmple(unit.to_unit(bounds.max)).all()
                 })
@@ -361,13 +435,13 @@ mod tests {
             listed += near.len();
             let (lo, hi) = (unit.to_unit(bounds.min), unit.to_unit(bounds.max));
             for &i in &near {
-                let s = unit.spheres[i as usize];
+                let s = unit.sphere(i as usize);
                 let d = s.center.distance(s.center.clamp(lo, hi));
                 assert!(d < s.radius + margin + 1e-9, "sphere {i} listed at {d}");
             }
             for _ in 0..50 {
                 let x = unit.to_unit(bounds.min + r() * (bounds.max - bounds.min));
-                for (i, s) in unit.spheres.iter().enumerate() {
+                for (i, s) in unit.spheres().enumerate() {
                     if s.center.distance(x) < s.radius + margin {
                         held += 1;
                         assert!(near.binary_search(&(i as u32)).is_ok(), "sphere {i} missed");
@@ -399,7 +473,7 @@ mod tests {
         assert_eq!(sides.len(), values.len() + 1);
         for (i, &v) in values.iter().enumerate() {
             let want = (v.abs() > 0.01 * 0.5).then(|| SidePoint {
-                position: unit.spheres[i].center,
+                position: unit.center(i),
                 inside: v < 0.0,
             });
             assert_eq!(sides.get(i), want, "sample {i} ({v})");

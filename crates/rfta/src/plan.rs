@@ -119,7 +119,7 @@ impl<'a> Plan<'a> {
         let owner_radius = unit.clamp.min(band);
         let spacing = Some(unit.spacing());
         let far_spheres = if owner_radius < unit.clamp {
-            (unit.spheres.iter())
+            (unit.spheres())
                 .filter(|s| s.radius >= owner_radius && s.radius < unit.clamp)
                 .count()
         } else {

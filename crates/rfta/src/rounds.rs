@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use rfta_feasible::TangentPoints;
-use rfta_geom::OrientedPoints;
+use rfta_geom::{OrientedPoints, SphereSet};
 use rfta_sphere_tree::SphereTree;
 use rfta_spsr::{SidePoint, SideSet, SpsrParams};
 
@@ -39,11 +39,11 @@ pub(crate) fn fine_tune(
     let mut all = None;
     let mut pool = None;
     if params.rounds > 0 && params.batch_holds_all(n) {
-        all = Some(SphereTree::new(&unit.spheres));
+        all = Some(SphereTree::new(unit));
     } else if plan.fine_rounds {
         pool = Some(
             (0..n as u32)
-                .filter(|&i| unit.spheres[i as usize].radius < plan.raster_radius)
+                .filter(|&i| unit.radius(i as usize) < plan.raster_radius)
                 .collect::<Vec<u32>>(),
         );
     }
@@ -62,9 +62,9 @@ pub(crate) fn fine_tune(
             None => {
                 let seed = Seeds(params.seed).round_batch(round);
                 batch = match &pool {
-                    None => SphereTree::batch(&unit.spheres, params.batch_size, seed),
+                    None => SphereTree::batch(unit, params.batch_size, seed),
                     Some(pool) => SphereTree::with_indices(
-                        &unit.spheres,
+                        unit,
                         &crate::initial::draw_batch(pool, params.batch_size, seed),
                     ),
                 };
@@ -92,7 +92,7 @@ pub(crate) fn fine_tune(
         };
         let next = counted(n, progress, |done| {
             rfta_feasible::fine_tune(
-                &unit.spheres,
+                unit,
                 &unit.values,
                 &mesh,
                 &cloud,

@@ -62,7 +62,7 @@ pub(super) fn judge(
     // The spheres the tests below can meet: those that reach the component's box, or come
     // within the gap margin of it (closes_gap).
     let margin = consistency::GAP_MARGIN * unit.spacing();
-    let tree = SphereTree::with_indices(&unit.spheres, &unit.spheres_reaching(bounds, margin));
+    let tree = SphereTree::with_indices(unit, &unit.spheres_reaching(bounds, margin));
     let tol = params.tolerance;
     // A closed component stands for a solid (outward) or a cavity (inward): a sample inside it
     // of that sign witnesses it, however small it is. Computed at most once.
@@ -70,7 +70,7 @@ pub(super) fn judge(
     let mut encloses_witness = || {
         *witnessed.get_or_insert_with(|| {
             unit.samples_within(bounds).into_iter().any(|i| {
-                let p = unit.to_input(unit.spheres[i].center);
+                let p = unit.to_input(unit.center(i));
                 let w: f64 = faces
                     .iter()
                     .map(|&f| {
@@ -164,10 +164,7 @@ pub(super) fn closes_gap(
         .map(|&f| mesh.triangle(f).map(|v| unit.to_unit(v)))
         .collect();
     let witnesses = reached.iter().filter(|&&i| {
-        let (c, r) = (
-            unit.spheres[i as usize].center,
-            unit.values[i as usize].abs(),
-        );
+        let (c, r) = (unit.center(i as usize), unit.values[i as usize].abs());
         let d = triangles
             .iter()
             .map(|[a, b, t]| {

@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use rfta_feasible::TangentPoints;
-use rfta_geom::{SdfSamples, TriMesh};
+use rfta_geom::{SdfSamples, SphereSet, TriMesh};
 use rfta_sphere_tree::SphereTree;
 
 use crate::normalize::UnitBox;
@@ -313,9 +313,9 @@ fn repair_once(
     // where that is shorter, with faces split where they cut a sphere no vertex is in.
     let r_own = plan.owner_radius;
     let near: Vec<u32> = (0..unit.len() as u32)
-        .filter(|&i| unit.spheres[i as usize].radius < r_own)
+        .filter(|&i| unit.radius(i as usize) < r_own)
         .collect();
-    let near = SphereTree::with_indices(&unit.spheres, &near);
+    let near = SphereTree::with_indices(unit, &near);
     // A level set's surface onto its interpolant's zero set, before the dents (which then dent
     // past any sample the move left on the wrong side).
     if plan.field.read_as == crate::Reading::LevelSet {

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
-use rfta_geom::{Sphere, TriMesh};
+use rfta_geom::{Sphere, SphereSet, TriMesh};
 use rfta_mesh::MeshIndex;
 use rfta_simplify::{Judge, Options, Patch, Watch};
 use rfta_sphere_tree::SphereTree;
@@ -108,11 +108,11 @@ impl SampleJudge {
         let near: Vec<(Sphere, bool, f64, DVec3)> = (0..unit.len())
             .into_par_iter()
             .filter_map(|i| {
-                let s = &unit.spheres[i];
-                let sphere = Sphere::new(unit.to_input(s.center), unit.to_input_length(s.radius));
-                if sphere.radius > reach {
+                let radius = unit.to_input_length(unit.radius(i));
+                if radius > reach {
                     return None;
                 }
+                let sphere = Sphere::new(unit.to_input(unit.center(i)), radius);
                 let sided = unit.to_input_length(unit.values[i].abs()) > SIGN_MARGIN * h;
                 let watch = watch.reach(sphere.radius, sided);
                 let foot = index.closest_point_within(sphere.center, watch * watch)?;

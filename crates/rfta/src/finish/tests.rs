@@ -40,15 +40,14 @@ fn ball(c: DVec3, r: f64) -> TriMesh {
 fn pushed_vertices_leave_every_sphere_and_others_stay() {
     let unit = UnitBox::new(&ball_grid(), None, None);
     let all: Vec<u32> = (0..unit.len() as u32).collect();
-    let tree = SphereTree::with_indices(&unit.spheres, &all);
+    let tree = SphereTree::with_indices(&unit, &all);
     let depth = PUSH_DEPTH * unit.spacing();
     let deepest = |mesh: &TriMesh| {
         mesh.vertices
             .iter()
             .flat_map(|&v| {
                 let p = unit.to_unit(v);
-                unit.spheres
-                    .iter()
+                unit.spheres()
                     .map(move |s| s.radius - (p - s.center).length())
             })
             .fold(f64::NEG_INFINITY, f64::max)
@@ -82,8 +81,7 @@ fn deepest_entry(unit: &UnitBox, mesh: &TriMesh) -> f64 {
         vertices: mesh.vertices.iter().map(|&v| frame.to_frame(v)).collect(),
         faces: mesh.faces.clone(),
     };
-    unit.spheres
-        .iter()
+    unit.spheres()
         .map(|s| {
             let d = (0..part.faces.len())
                 .map(|f| {
