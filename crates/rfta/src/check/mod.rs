@@ -23,10 +23,10 @@
 //! it is returned.
 
 mod plane;
+mod separation;
 
 pub(crate) use plane::samples2;
 
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 use rfta_geom::{SdfSamples, TriMesh};
@@ -122,65 +122,23 @@ pub fn inspect(samples: &SdfSamples) -> Inspection {
         overlap: 1.0,
         ..Inspection::default()
     };
-    let neg: Vec<usize> = (0..values.len()).filter(|&i| values[i] < 0.0).collect();
-    let pos: Vec<usize> = (0..values.len()).filter(|&i| values[i] > 0.0).collect();
-    if !neg.is_empty() && !pos.is_empty() {
-        let mut ratios: Vec<(usize, usize, f64)> = Vec::with_capacity(neg.len() + pos.len());
-        let ratio = |i: usize, j: usize| {
-            let d = samples.position(i).distance(samples.position(j));
-            let gap = values[i].abs() + values[j].abs();
-            let ratio = if d > 0.0 { gap / d } else { f64::INFINITY };
-            (i, j, ratio)
-        };
-        for (from, to) in [(&neg, &pos), (&pos, &neg)] {
-            if let Some(grid) = samples.as_grid() {
-                // On a grid, the exact feature transform finds every sample's nearest sample of
-                // the other sign in linear time (a tree query per sample cost seconds at 129^3,
-                // most of them for far samples).
-                let mut marked = vec![false; values.len()];
-                for &j in to.iter() {
-                    marked[j] = true;
-                }
-                let nearest = grid.nearest_marked(&marked);
-                ratios.par_extend(from.par_iter().map(|&i| ratio(i, nearest[i] as usize)));
-                continue;
+    if let Some(found) = separation::measure(samples) {
+        out.checked = found.checked;
+        out.overlap = found.overlap;
+        out.inconsistent = found.inconsistent;
+        out.severe = found.severe;
+        out.worst = found.worst.map(|(i, j, r)| {
+            if values[i].abs() >= values[j].abs() {
+                (i, j, r)
+            } else {
+                (j, i, r)
             }
-            let pts: Vec<[f64; 3]> = to.iter().map(|&j| samples.position(j).to_array()).collect();
-            let Ok(kd) = ImmutableKdTree::<f64, 3>::new_from_slice(&pts) else {
-                continue;
-            };
-            ratios.par_extend(from.par_iter().map(|&i| {
-                let nn = kd
-                    .query(&samples.position(i).to_array())
-                    .nearest_one::<SquaredEuclidean<f64>>()
-                    .execute();
-                ratio(i, to[nn.item as usize])
-            }));
-        }
-        out.checked = ratios.len();
-        out.overlap = ratios
-            .iter()
-            .map(|r| r.2)
-            .filter(|&r| r <= SEVERE_RATIO)
-            .fold(1.0, f64::max);
-        out.inconsistent = ratios.iter().filter(|r| r.2 > SEPARATION_TOLERANCE).count();
-        out.severe = ratios.iter().filter(|r| r.2 > SEVERE_RATIO).count();
-        out.worst = ratios
-            .iter()
-            .filter(|r| r.2 > SEPARATION_TOLERANCE)
-            .max_by(|a, b| a.2.total_cmp(&b.2).then(b.0.cmp(&a.0)))
-            .map(|&(i, j, r)| {
-                if values[i].abs() >= values[j].abs() {
-                    (i, j, r)
-                } else {
-                    (j, i, r)
-                }
-            });
+        });
     }
     out.clamp = detect_clamp(samples);
     out.lipschitz_excess = lipschitz_excess(samples);
     out.rim = rim(samples);
-    out.positive = pos.len();
+    out.positive = values.par_iter().filter(|&&v| v > 0.0).count();
     out
 }
 
