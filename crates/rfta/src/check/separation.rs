@@ -143,6 +143,23 @@ mod tests {
         (ratios.len(), inconsistent, severe, overlap, worst)
     }
 
+    /// `measure(samples)` against [`figures`] of `ratios`, which must hold inconsistent samples
+    /// and severe ones.
+    fn agree(samples: &SdfSamples, ratios: &[(usize, f64)]) {
+        let want = figures(ratios);
+        assert!(want.1 > want.2 && want.2 > 5, "{want:?}");
+        let found = measure(samples).expect("both signs");
+        let worst = found.worst.map(|(i, _, r)| (i, r));
+        let got = (
+            found.checked,
+            found.inconsistent,
+            found.severe,
+            found.overlap,
+            worst,
+        );
+        assert_eq!(got, want);
+    }
+
     /// Every figure is the one a list of all the ratios gives: a ball's exact distances spoiled
     /// by noise up to 40% (some samples inconsistent, some severe); on a grid against the
     /// feature transform's nearest samples (a grid has ties, each broken one way), scattered
@@ -178,19 +195,10 @@ mod tests {
                     .map(|i| ratio(&p, &values, i, nearest[i] as usize)),
             );
         }
-        let samples = SdfSamples::grid(grid, values.clone()).expect("samples");
-        let want = figures(&on_grid);
-        assert!(want.1 > want.2 && want.2 > 5, "{want:?}");
-        let found = measure(&samples).expect("both signs");
-        let worst = found.worst.map(|(i, _, r)| (i, r));
-        let got = (
-            found.checked,
-            found.inconsistent,
-            found.severe,
-            found.overlap,
-            worst,
+        agree(
+            &SdfSamples::grid(grid, values.clone()).expect("samples"),
+            &on_grid,
         );
-        assert_eq!(got, want);
 
         let mut jitter = rfta_geom::rng::Rng::new(8);
         let mut r = || jitter.next_f64() - 0.5;
@@ -207,19 +215,7 @@ mod tests {
                 Some(ratio(&q, &values, i, j))
             })
             .collect();
-        let samples = SdfSamples::scattered(q, values).expect("samples");
-        let want = figures(&scan);
-        assert!(want.1 > want.2 && want.2 > 5, "{want:?}");
-        let found = measure(&samples).expect("both signs");
-        let worst = found.worst.map(|(i, _, r)| (i, r));
-        let got = (
-            found.checked,
-            found.inconsistent,
-            found.severe,
-            found.overlap,
-            worst,
-        );
-        assert_eq!(got, want);
+        agree(&SdfSamples::scattered(q, values).expect("samples"), &scan);
 
         let positive = SdfSamples::grid(grid, vec![1.0; grid.len()]).expect("samples");
         assert_eq!(measure(&positive), None);
