@@ -38,7 +38,7 @@ fn run(name: &str) -> Outcome {
         Err(e) => panic!("{name}: {e}"),
     };
     let params = Params {
-        rounds: 1,
+        rounds: Some(1),
         ..Params::fast()
     };
     match rfta::reconstruct(&samples, &params) {

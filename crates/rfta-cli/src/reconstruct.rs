@@ -13,7 +13,8 @@ use crate::ui::{Exit, Ui, parse_bounds};
 /// Parameter presets.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub(crate) enum Preset {
-    /// The paper's defaults: 10 fine-tuning rounds, 3 points per sphere.
+    /// The paper's defaults: 10 fine-tuning rounds (3 on grids of more than 80 cells along their
+    /// longest side), 3 points per sphere.
     Default,
     /// The setting of the paper's Table 2: 20 rounds, 30 points per sphere.
     Paper,
@@ -123,7 +124,8 @@ pub(crate) struct Tuning {
     #[arg(long, value_enum, default_value_t = Gpu::Off)]
     #[serde(skip)]
     gpu: Gpu,
-    /// Fine-tuning rounds (k_max).
+    /// Fine-tuning rounds (k_max; the preset's: 10, 3 on grids of more than 80 cells along
+    /// their longest side, where three hold ten's accuracy).
     #[arg(long, visible_alias = "iters")]
     #[serde(skip_serializing_if = "Option::is_none")]
     rounds: Option<usize>,
@@ -285,7 +287,9 @@ pub(crate) fn run_pipeline(
     params: &Params,
     ui: &Ui,
 ) -> Result<rfta::Reconstruction> {
-    let bar = ui.progress(params.rounds as u64 + 2, "rfta");
+    // The initial points and the final solve, and the rounds once the first says how many the
+    // run takes (they depend on the samples: `Params::rounds_for`).
+    let bar = ui.progress(2, "rfta");
     let b = bar.clone();
     let mut label = String::from("initial");
     let mut progress = move |stage: Stage| match stage {
@@ -294,6 +298,7 @@ pub(crate) fn run_pipeline(
             b.set_message(label.clone());
         }
         Stage::FineTune { round, of } => {
+            b.set_length(of as u64 + 2);
             label = format!("round {round}/{of}");
             b.set_message(label.clone());
             b.inc(1);

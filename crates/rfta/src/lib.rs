@@ -38,7 +38,7 @@
 //! let grid = Grid::cube(12, -1.0, 1.0)?;
 //! let values = (0..grid.len()).map(|i| grid.position(i).length() - 0.5).collect();
 //! let samples = SdfSamples::grid(grid, values)?;
-//! let params = Params { rounds: 2, ..Params::default() };
+//! let params = Params { rounds: Some(2), ..Params::default() };
 //! let out = reconstruct(&samples, &params)?;
 //! let v = out.mesh.signed_volume();
 //! assert!((v - 0.5236).abs() < 0.05, "volume {v}");
@@ -71,7 +71,7 @@ pub use rfta_spsr as spsr;
 pub use consistency::{Consistency, Margins};
 pub use field::{Field, FieldReport, Reading};
 pub use memory::{available_memory, check_memory, estimate_peak_memory, format_bytes};
-pub(crate) use params::{CELLS_PER_SPACING, RASTER_REACH, SUB_CELL_LOOP};
+pub(crate) use params::{CELLS_PER_SPACING, RASTER_REACH, ROUNDS, SUB_CELL_LOOP};
 pub use params::{InitialPoints, PRESETS, Params, Seeds, screening_at, spsr_depth_for};
 pub use pool::{GlobalPool, cores, start_global_pool};
 pub use report::{

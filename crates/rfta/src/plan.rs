@@ -65,6 +65,8 @@ pub(crate) struct Plan<'a> {
     /// Whether the rounds solve a depth coarser than the final solve and draw their batches
     /// from the spheres near the surface ([`Params::fine_rounds`]).
     pub(crate) fine_rounds: bool,
+    /// The fine-tuning rounds ([`Params::rounds_for`]).
+    pub(crate) rounds: usize,
     /// Spheres that own no tangency point for being farther than [`Params::owner_band`] (not
     /// clamped ones).
     pub(crate) far_spheres: usize,
@@ -141,7 +143,7 @@ impl<'a> Plan<'a> {
         );
         journal.timed(Step::Field, t);
         if !field.read_as.fine_tunes() {
-            params.rounds = 0;
+            params.rounds = Some(0);
         }
         if field.read_as == Reading::Bounds {
             feasible.k_search = feasible.k_search.min(field::NEAR_K_SEARCH);
@@ -161,6 +163,7 @@ impl<'a> Plan<'a> {
             round_spsr: params.round_spsr_params(spacing),
             final_spsr: params.spsr_params(spacing),
             fine_rounds: params.fine_rounds(spacing),
+            rounds: params.rounds_for(unit.on_grid(), spacing),
             raster_radius,
             owner_radius,
             params,

@@ -58,7 +58,7 @@ pub fn reconstruct(samples: &SdfSamples2, params: &Params) -> Result<Reconstruct
 /// The 2D pipeline's settings from `params`.
 fn plane_params(params: &Params) -> PlaneParams {
     PlaneParams {
-        rounds: params.rounds,
+        rounds: params.rounds.unwrap_or(crate::ROUNDS),
         max_points_per_sphere: params.max_points_per_sphere,
         transport_step: params.transport_step,
         tolerance: params.tolerance,

@@ -38,7 +38,7 @@ pub(crate) fn fine_tune(
     // every query visit most of the tree.
     let mut all = None;
     let mut pool = None;
-    if params.rounds > 0 && params.batch_holds_all(n) {
+    if plan.rounds > 0 && params.batch_holds_all(n) {
         all = Some(SphereTree::new(unit));
     } else if plan.fine_rounds {
         pool = Some(
@@ -47,11 +47,11 @@ pub(crate) fn fine_tune(
                 .collect::<Vec<u32>>(),
         );
     }
-    for round in 1..=params.rounds {
+    for round in 1..=plan.rounds {
         go_on()?;
         progress(Stage::FineTune {
             round,
-            of: params.rounds,
+            of: plan.rounds,
         });
         report.points_per_round.push(cloud.len());
         crate::pool::waiters_back();

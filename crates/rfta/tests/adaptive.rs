@@ -24,7 +24,7 @@ fn cube() -> Aabb {
 
 fn params(threads: usize) -> Params {
     Params {
-        rounds: 3,
+        rounds: Some(3),
         threads: Some(threads),
         ..Params::default()
     }

@@ -90,7 +90,7 @@ fn exact_distances_are_read_as_distances_and_the_reading_can_be_forced() {
     let (grid, values) = torus_grid(32, |_, d| d);
     let samples = SdfSamples::grid(grid, values).expect("samples");
     let params = Params {
-        rounds: 2,
+        rounds: Some(2),
         ..Params::default()
     };
     let out = reconstruct(&samples, &params).expect("reconstruct");
@@ -195,7 +195,7 @@ fn a_csg_bound_is_read_as_bounds() {
     assert!(ours < 0.7 * theirs, "{ours} against {theirs}");
     let distance = Params {
         field: Field::Distance,
-        rounds: 1,
+        rounds: Some(1),
         ..Params::default()
     };
     let out = reconstruct(&samples, &distance).expect("reconstruct");
@@ -315,7 +315,7 @@ fn a_blended_function_is_meshed_at_its_zero_set_when_its_distance_reading_fails(
     };
     // Three rounds: the distance reading that fails is the slow part of the run.
     let params = Params {
-        rounds: 3,
+        rounds: Some(3),
         ..Params::default()
     };
     let out = reconstruct_adaptive(

@@ -224,7 +224,7 @@ fn removed_loops_take_their_vertices_with_them() {
     for sdf in [ring as fn(DVec2) -> f64, flat_box, square_with_hole] {
         for n in 6..=14 {
             let params = Params {
-                rounds: 3,
+                rounds: Some(3),
                 ..Params::default()
             };
             let Ok(out) = plane::reconstruct(&grid_samples(n, sdf), &params) else {

@@ -125,7 +125,7 @@ fn every_reconstruct_option_reaches_the_rows() {
     .expect("options");
     let params = |c: &Cli| c.args.tuning.params().expect("valid");
     assert_eq!(params(&again), params(&cli));
-    assert_eq!(params(&cli).rounds, 4);
+    assert_eq!(params(&cli).rounds, Some(4));
     assert_eq!(params(&cli).spsr_depth, Some(7));
 }
 

@@ -295,8 +295,9 @@ def reconstruct(
     bounds : (lo, hi), ((xmin, ymin, zmin), (xmax, ymax, zmax)) or 6 numbers
         The grid's corner points (default [-1, 1]^3). Ignored with ``points``.
     preset : "default", "paper" or "fast"
-        The paper's defaults (10 fine-tuning rounds), its Table 2 (20 rounds, 30 points per
-        sphere), or gpytoolbox's defaults (3 rounds). The keywords below override it.
+        The paper's defaults (10 fine-tuning rounds; 3 on grids of more than 80 cells along
+        their longest side), its Table 2 (20 rounds, 30 points per sphere), or gpytoolbox's
+        defaults (3 rounds). The keywords below override it.
     points : (n, 3) array, optional
         Scattered sample positions (``S`` then has shape (n,)).
     sdf : callable, optional

@@ -298,7 +298,7 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
 fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
     let samples = ball_grid();
     let params = Params {
-        rounds: 2,
+        rounds: Some(2),
         ..Params::default()
     };
     // The stages of an adaptive guide pass.

@@ -223,7 +223,7 @@ impl Scenario {
         };
         match self {
             Scenario::Rounds => rfta::Params {
-                rounds: level as usize,
+                rounds: Some(level as usize),
                 ..base
             },
             Scenario::Raster => rfta::Params {
