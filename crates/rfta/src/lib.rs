@@ -71,7 +71,7 @@ pub use rfta_spsr as spsr;
 pub use consistency::{Consistency, Margins};
 pub use field::{Field, FieldReport, Reading};
 pub use memory::{available_memory, check_memory, estimate_peak_memory, format_bytes};
-pub(crate) use params::{CELLS_PER_SPACING, RASTER_REACH, ROUNDS, SUB_CELL_LOOP};
+pub(crate) use params::{CELLS_PER_SPACING, RASTER_REACH, SUB_CELL_LOOP};
 pub use params::{InitialPoints, PRESETS, Params, Seeds, screening_at, spsr_depth_for};
 pub use pool::{GlobalPool, cores, start_global_pool};
 pub use report::{

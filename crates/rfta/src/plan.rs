@@ -83,7 +83,7 @@ impl<'a> Plan<'a> {
         params: &Params,
         journal: &mut Journal,
     ) -> Result<Self> {
-        let (samples, factor, mut params) = match normalize::working_scale(samples) {
+        let (samples, factor, params) = match normalize::working_scale(samples) {
             // Reconstructed at a scale of ordinary size, then scaled back (exactly: a power of
             // two).
             Some((scaled, factor)) => (
@@ -142,9 +142,6 @@ impl<'a> Plan<'a> {
             None,
         );
         journal.timed(Step::Field, t);
-        if !field.read_as.fine_tunes() {
-            params.rounds = Some(0);
-        }
         if field.read_as == Reading::Bounds {
             feasible.k_search = feasible.k_search.min(field::NEAR_K_SEARCH);
         }
@@ -163,7 +160,12 @@ impl<'a> Plan<'a> {
             round_spsr: params.round_spsr_params(spacing),
             final_spsr: params.spsr_params(spacing),
             fine_rounds: params.fine_rounds(spacing),
-            rounds: params.rounds_for(unit.on_grid(), spacing),
+            // A level set's and bounds' points are not fine-tuned.
+            rounds: if field.read_as.fine_tunes() {
+                params.rounds_for(unit.on_grid(), spacing)
+            } else {
+                0
+            },
             raster_radius,
             owner_radius,
             params,

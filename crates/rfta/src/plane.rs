@@ -58,7 +58,8 @@ pub fn reconstruct(samples: &SdfSamples2, params: &Params) -> Result<Reconstruct
 /// The 2D pipeline's settings from `params`.
 fn plane_params(params: &Params) -> PlaneParams {
     PlaneParams {
-        rounds: params.rounds.unwrap_or(crate::ROUNDS),
+        // Fewer rounds are a rule of 3D grids only.
+        rounds: params.rounds_for(false, None),
         max_points_per_sphere: params.max_points_per_sphere,
         transport_step: params.transport_step,
         tolerance: params.tolerance,

@@ -156,12 +156,6 @@ pub fn reconstruct_adaptive(
     cancel: &AtomicBool,
 ) -> Result<AdaptiveReconstruction> {
     validate(params, bounds, budget)?;
-    // The paper's rounds in every pass's rule: the samples are scattered, and a grid read again
-    // (`bounds.rs`) keeps the rounds it was measured with.
-    let params = &Params {
-        rounds: Some(params.rounds.unwrap_or(crate::ROUNDS)),
-        ..params.clone()
-    };
     let extent = bounds.max - bounds.min;
     // What the budget's samples would need, before the first evaluation (hostile test E15: a
     // budget of 1e11 ran on for minutes): an adaptive run holds at least what a grid of as many
@@ -192,7 +186,8 @@ pub fn reconstruct_adaptive(
         return level_set::refine_and_read(base, &mut asker, n, params, progress, on_pass);
     }
     let guide = Params {
-        rounds: params.rounds.map(|k| k.min(GUIDE_ROUNDS)),
+        // The rounds of scattered samples (the passes' samples are), at most GUIDE_ROUNDS.
+        rounds: Some(params.rounds_for(false, None).min(GUIDE_ROUNDS)),
         ..params.clone()
     };
     let mut report = AdaptiveReport {
