@@ -111,7 +111,10 @@ impl Octree {
         let vals: Vec<f64> = self
             .samples
             .par_iter()
-            .map(|s| solve::evaluate(&self.levels, sol, s.pos, self.base))
+            .map_init(
+                || solve::Evaluator::new(&self.levels, sol, self.base),
+                |at, s| at.at(s.pos),
+            )
             .collect();
         let (mut num, mut den) = (0.0, 0.0);
         for (s, f) in self.samples.iter().zip(&vals) {
@@ -248,7 +251,10 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
             solve_time += t2.elapsed();
             break (sol, iso);
         }
-        let at = |p: glam::DVec3| solve::evaluate(&octree.levels, &sol, p, base);
+        let at = || {
+            let mut at = solve::Evaluator::new(&octree.levels, &sol, base);
+            move |p: glam::DVec3| at.at(p)
+        };
         let wrong = sides.wrong(&at, iso, last);
         solve_time += t2.elapsed();
         if last || wrong.is_empty() {

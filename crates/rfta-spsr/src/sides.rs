@@ -156,21 +156,23 @@ impl<'a> Sides<'a> {
         self.errors
     }
 
-    /// The side points on the wrong side of the function `at` at `iso` (within [`SIDE_MARGIN`]),
-    /// counted in [`Sides::errors`]. The first pass measures every point and notes those within
-    /// [`SIDE_RECHECK`] of wrong; the passes between look at those again; the `last` (and one
-    /// that finds none wrong) counts every point, for the surface returned.
-    pub(crate) fn wrong(
+    /// The side points on the wrong side of the function at `iso` (within [`SIDE_MARGIN`]),
+    /// counted in [`Sides::errors`]. The function is read by evaluators `at` makes, one per run
+    /// of consecutive points (each keeps what it looked up for the next point). The first pass
+    /// measures every point and notes those within [`SIDE_RECHECK`] of wrong; the passes between
+    /// look at those again; the `last` (and one that finds none wrong) counts every point, for
+    /// the surface returned.
+    pub(crate) fn wrong<E: FnMut(DVec3) -> f64>(
         &mut self,
-        at: &(impl Fn(DVec3) -> f64 + Sync),
+        at: &(impl Fn() -> E + Sync),
         iso: f64,
         last: bool,
     ) -> Vec<usize> {
         // How far each side point in the cube is on its side beyond the margin (negative:
         // wrong); `None` outside the cube.
-        let slack = |i: usize| {
+        let slack = |f: &mut E, i: usize| {
             let (p, inside) = self.point(i)?;
-            let f = at(p);
+            let f = f(p);
             Some(if inside {
                 f - iso - SIDE_MARGIN
             } else {
@@ -182,7 +184,10 @@ impl<'a> Sides<'a> {
         let below = |limit: f64| -> Vec<(usize, f64)> {
             (0..n)
                 .into_par_iter()
-                .filter_map(|i| slack(i).filter(|&s| s < limit).map(|s| (i, s)))
+                .map_init(at, |f, i| {
+                    slack(f, i).filter(|&s| s < limit).map(|s| (i, s))
+                })
+                .flatten()
                 .collect()
         };
         let wrong: Vec<usize> = match &self.recheck {
@@ -195,8 +200,10 @@ impl<'a> Sides<'a> {
             Some(near) => {
                 let w: Vec<usize> = near
                     .par_iter()
-                    .copied()
-                    .filter(|&i| slack(i).is_some_and(|s| s < 0.0))
+                    .map_init(at, |f, &i| {
+                        slack(f, i).is_some_and(|s| s < 0.0).then_some(i)
+                    })
+                    .flatten()
                     .collect();
                 if last || w.is_empty() {
                     // The surface returned: its count over every side point.

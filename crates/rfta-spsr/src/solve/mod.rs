@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use rfta_geom::glam::DVec3;
 
 use crate::basis::{AxisTables, combine};
-use crate::tree::{Level, Sample, cell_of, corner, hats_in};
+use crate::tree::{Level, Sample, cell_of, hats_in};
 use crate::{Boundary, SpsrParams};
 
 use crate::keys::NONE;
@@ -46,11 +46,13 @@ fn ic(c: [u32; 3]) -> [i64; 3] {
     [i64::from(c[0]), i64::from(c[1]), i64::from(c[2])]
 }
 
+mod evaluate;
 mod relax;
 mod stencil;
 mod system;
 mod transfer;
 
+pub(crate) use evaluate::Evaluator;
 use relax::*;
 pub(crate) use stencil::*;
 pub(crate) use system::*;
@@ -288,45 +290,6 @@ fn coarse_at_screening(levels: &[Level], sys: &LevelSystem, us: &[Vec<f64>], d: 
             }
         })
         .collect()
-}
-
-/// Evaluate the implicit function at a unit-cube point: the sum over depths of the hats around it.
-pub(crate) fn evaluate(levels: &[Level], sol: &Solution, p: DVec3, base: u32) -> f64 {
-    let mut f = 0.0;
-    let base = base.min(levels.len() as u32 - 1);
-    // Depths up to `base` are complete grids: their sum is interpolated from U_base.
-    let start = base as usize;
-    for (d, level) in levels.iter().enumerate().skip(start) {
-        let c = cell_of(p, d as u32);
-        let h = hats_in(p, c, d as u32);
-        let vals = if d == start { &sol.u[d] } else { &sol.x[d] };
-        match level.cell(ic(c)) {
-            Some(ci) => {
-                let corners = &level.corners[ci as usize];
-                for k in 0..8 {
-                    f += h[k] * vals[corners[k] as usize];
-                }
-            }
-            None => {
-                let mut any = false;
-                for (k, hk) in h.iter().enumerate() {
-                    let o = corner(k);
-                    let q = [c[0] + o[0], c[1] + o[1], c[2] + o[2]];
-                    if let Some(j) = level.node(ic(q)) {
-                        f += hk * vals[j as usize];
-                        any = true;
-                    }
-                }
-                // Nodes are the corners of cells, and a cell's parent is a cell: a finer cell
-                // touching the one around `p` would have a parent sharing a corner with this
-                // one. With no corner here, no finer depth has a hat over `p`.
-                if !any {
-                    break;
-                }
-            }
-        }
-    }
-    f
 }
 
 #[cfg(test)]

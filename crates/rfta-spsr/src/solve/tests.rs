@@ -167,10 +167,12 @@ fn restriction_is_the_ordered_scatter() -> Result<(), Box<dyn std::error::Error>
     Ok(())
 }
 
-/// Arbitrary coefficients on a thin octree: `evaluate`, which stops at the first depth
-/// without a hat over the point, equals the sum of every hat of every depth at the point.
+/// Arbitrary coefficients on a thin octree: an [`Evaluator`], which stops at the first depth
+/// without a hat over the point, gives the sum of every hat of every depth at the point; one that
+/// walks from point to point (each followed by a point a little way off, in the cells it looked up
+/// last at the coarser depths) gives the same bits as one made for each point.
 #[test]
-fn evaluate_is_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
+fn evaluators_give_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
     let (points, frame, levels, base) = thin_tree()?;
     let n = points.len();
     let mut next = sequence(12345);
@@ -191,6 +193,8 @@ fn evaluate_is_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
             .product::<f64>()
     };
     let mut deep = 0;
+    let mut walk = Evaluator::new(&levels, &sol, base);
+    let mut reused = 0;
     for k in 0..2000 {
         // Unit-cube points; every fourth next to a point of the cloud, where the fine depths
         // have hats.
@@ -215,9 +219,19 @@ fn evaluate_is_the_sum_of_all_hats() -> Result<(), Box<dyn std::error::Error>> {
                 sum += w * vals[i];
             }
         }
-        let f = evaluate(&levels, &sol, u, base);
+        let f = Evaluator::new(&levels, &sol, base).at(u);
         assert!((f - sum).abs() < 1e-12, "at {u}: {f} against {sum}");
+        for v in [u, u + DVec3::new(3e-3, -2e-3, 1e-3)] {
+            let (fresh, walked) = (Evaluator::new(&levels, &sol, base).at(v), walk.at(v));
+            assert_eq!(
+                fresh.to_bits(),
+                walked.to_bits(),
+                "at {v}: {walked} against {fresh}"
+            );
+        }
+        reused += walk.reused();
     }
     assert!(deep > 100, "too few points reach the finest depth: {deep}");
+    assert!(reused > 2000, "the walk reused {reused} lookups");
     Ok(())
 }
