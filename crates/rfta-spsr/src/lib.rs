@@ -221,8 +221,8 @@ pub struct SpsrReport {
     pub system_time: Duration,
     /// Time of the multigrid solve and the iso-value.
     pub solve_time: Duration,
-    /// Time of the iso-surface extraction (with the first solve's, taken before side points
-    /// refined the octree, when they did).
+    /// Time of the iso-surface extraction (with the first solve made again for its surface,
+    /// when a re-solve's reached the cube's faces after side points refined the octree).
     pub extract_time: Duration,
 }
 

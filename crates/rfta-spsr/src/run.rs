@@ -134,8 +134,6 @@ struct Solved {
     side_errors: Vec<usize>,
     system_time: Duration,
     solve_time: Duration,
-    /// Spent extracting the first pass's surface before the octree was refined.
-    extract_time: Duration,
 }
 
 /// The first solve's result, kept while side re-solves run: a re-solve that pulls the surface
@@ -144,12 +142,11 @@ struct Solved {
 enum FirstSolve {
     /// Its solution and iso-value, on the octree the re-solves use (not refined since).
     Solution(solve::Solution, f64),
-    /// Its surface, extracted before side points refined the octree, so that the octree it was
-    /// solved on need not be kept beside the refined one through the re-solves, where the final
-    /// solve's memory peaks (docs/speed.md, item 39).
-    Surface(Surface),
-    /// Its surface reaches the cube's faces: nothing falls back to it.
-    Open,
+    /// Side points refined the octree since. Its surface, needed only in the rare case above, is
+    /// then made again from the points ([`first_surface_again`]): neither the octree before nor
+    /// its surface is kept beside the refined one through the re-solves, where the final solve's
+    /// memory peaks (docs/speed.md, items 39 and 48).
+    Refined,
 }
 
 /// An extracted surface `χ = iso`, in world coordinates.
@@ -200,6 +197,32 @@ fn first_surface(
         .then(|| surface_of(levels, &values, iso, params, frame))
 }
 
+/// [`first_surface`] after the octree was refined: the first solve made again, on the octree
+/// of the points alone with the systems of the first pass (the same bits as the first time, so
+/// the same surface).
+fn first_surface_again(points: &OrientedPoints, params: &SpsrParams) -> Result<Option<Surface>> {
+    let octree = Octree::build(points, params)?;
+    let (_, alpha) = octree.screening(params);
+    let ((v, down), systems) = octree.first_pass(params, alpha);
+    let sol = solve::solve(
+        &octree.levels,
+        &systems,
+        &v,
+        &down,
+        params,
+        octree.base,
+        None,
+    );
+    let iso = octree.iso_value(&sol);
+    Ok(first_surface(
+        &octree.levels,
+        &sol,
+        iso,
+        params,
+        &octree.frame,
+    ))
+}
+
 /// The solve, then while side points are on the wrong side (at most [`SIDE_PASSES`] times)
 /// screening terms for them and a re-solve from the solution before, on the same octree unless
 /// a wrong point's cell needs refining ([`crate::reconstruct_with_sides`]).
@@ -215,7 +238,6 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
     let mut solve_time = Duration::ZERO;
     // The first solve's result, kept while re-solves run.
     let mut first: Option<FirstSolve> = None;
-    let mut extract_time = Duration::ZERO;
     // Side points the octree was refined around.
     let mut seeds: Vec<glam::DVec3> = Vec::new();
     // A re-solve's start: the previous solve's coefficients, on the octree's nodes or, after it
@@ -279,7 +301,7 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
             // undo it. The octree is rebuilt with such points refined as the samples are; the
             // next solve starts from this one's coefficients on the nodes both octrees share.
             seeds.extend(coarse);
-            extract_time += refine_for_sides(octree, &seeds, &mut first, start, params);
+            refine_for_sides(octree, &seeds, &mut first, start);
             let t = Instant::now();
             v = solve::splat_normals(&octree.levels, &octree.samples);
             down = solve::down_pass(&octree.levels, &v);
@@ -293,27 +315,21 @@ fn solve_with_sides(octree: &mut Octree, params: &SpsrParams, sides: &dyn SideSe
         side_errors: sides.into_errors(),
         system_time,
         solve_time,
-        extract_time,
     }
 }
 
 /// Rebuilds the octree around `seeds` (side points in coarse cells), first taking from the
-/// levels before what the re-solves still need of them: the first solve's surface (while
-/// `first` is its solution on these levels) and the node indices `start`'s coefficients lie on.
-/// Returns the time spent extracting.
+/// levels before what the re-solves still need of them: the node indices `start`'s
+/// coefficients lie on. The first solve's solution, on the levels before, is dropped.
 fn refine_for_sides(
     octree: &mut Octree,
     seeds: &[glam::DVec3],
     first: &mut Option<FirstSolve>,
     start: &mut solve::WarmStart,
-    params: &SpsrParams,
-) -> Duration {
-    let t = Instant::now();
-    if let Some(FirstSolve::Solution(sol, iso)) = first {
-        let taken = first_surface(&octree.levels, sol, *iso, params, &octree.frame);
-        *first = Some(taken.map_or(FirstSolve::Open, FirstSolve::Surface));
+) {
+    if first.is_some() {
+        *first = Some(FirstSolve::Refined);
     }
-    let extract_time = t.elapsed();
     start.nodes = Some(
         octree
             .levels
@@ -322,7 +338,6 @@ fn refine_for_sides(
             .collect(),
     );
     octree.refine_around(seeds);
-    extract_time
 }
 
 /// The surface of `solved` on the octree's levels (the first pass's, when a re-solve pulled it
@@ -347,7 +362,6 @@ fn extract_surface(
         mut side_errors,
         system_time,
         solve_time,
-        extract_time: first_extract_time,
     } = solved;
     let t3 = Instant::now();
     let solve::Solution { x, u } = sol;
@@ -361,8 +375,7 @@ fn extract_surface(
             FirstSolve::Solution(sol, first_iso) => {
                 first_surface(&levels, &sol, first_iso, params, &frame)
             }
-            FirstSolve::Surface(surface) => Some(surface),
-            FirstSolve::Open => None,
+            FirstSolve::Refined => first_surface_again(points, params)?,
         },
         _ => None,
     };
@@ -376,7 +389,7 @@ fn extract_surface(
     if surface.mesh.faces.is_empty() || !surface.iso.is_finite() {
         return Err(Error::NoSurface { iso: surface.iso });
     }
-    let extract_time = first_extract_time + t3.elapsed();
+    let extract_time = t3.elapsed();
     let report = SpsrReport {
         points: points.len(),
         samples: samples.len(),
