@@ -18,9 +18,9 @@ enum Found {
 /// Evaluates one solution at point after point. Each depth's cell lookup (and, outside the tree,
 /// its eight corner lookups) is kept for the next point: points taken in an order that keeps
 /// neighbours together (a grid's samples row by row, the samples in Morton order) mostly fall in
-/// the cells the point before fell in, at every depth but the finest few. The sums are those of
-/// [`evaluate`], term by term in the same order: the same values to the bit as an evaluator
-/// made for each point.
+/// the cells the point before fell in, at every depth but the finest few. The sums are the ones
+/// an evaluator made for each point forms, term by term in the same order: the same values to
+/// the bit.
 pub(crate) struct Evaluator<'a> {
     levels: &'a [Level],
     sol: &'a Solution,
