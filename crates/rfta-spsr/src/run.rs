@@ -197,27 +197,16 @@ fn first_surface(
         .then(|| surface_of(levels, &values, iso, params, frame))
 }
 
-/// [`first_surface`] after the octree was refined: the first solve made again, on the octree
-/// of the points alone with the systems of the first pass (the same bits as the first time, so
-/// the same surface).
+/// [`first_surface`] after the octree was refined: the first solve made again, the solve of the
+/// points' own octree without side points (the same bits as the first time, so the same
+/// surface).
 fn first_surface_again(points: &OrientedPoints, params: &SpsrParams) -> Result<Option<Surface>> {
-    let octree = Octree::build(points, params)?;
-    let (_, alpha) = octree.screening(params);
-    let ((v, down), systems) = octree.first_pass(params, alpha);
-    let sol = solve::solve(
-        &octree.levels,
-        &systems,
-        &v,
-        &down,
-        params,
-        octree.base,
-        None,
-    );
-    let iso = octree.iso_value(&sol);
+    let mut octree = Octree::build(points, params)?;
+    let plain = solve_with_sides(&mut octree, params, crate::sides::NO_SIDES);
     Ok(first_surface(
         &octree.levels,
-        &sol,
-        iso,
+        &plain.sol,
+        plain.iso,
         params,
         &octree.frame,
     ))
