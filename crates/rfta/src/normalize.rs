@@ -169,6 +169,11 @@ impl UnitBox {
         self.grid.is_some()
     }
 
+    /// The samples' grid in the unit box, when they lie on one.
+    pub(crate) fn grid(&self) -> Option<&Grid> {
+        self.grid.as_ref()
+    }
+
     /// On a grid, for each sample of `set` that `keep` takes, the point its gradient points to
     /// from its value away: `c - s g / |g|`, with `g` the central difference of the values (one
     /// sided at the grid's faces); for an exact SDF the closest surface point. `None` for
@@ -200,25 +205,6 @@ impl UnitBox {
         let dims = g.dims();
         let at = |a: usize| (t[a].round().max(0.0) as usize).min(dims[a] - 1);
         Some(g.index(at(0), at(1), at(2)))
-    }
-
-    /// The spheres (unit box) that reach within `margin` of `bounds` (a box in the samples'
-    /// coordinates), in index order: every sphere that can hold a point of the box, or come
-    /// within `margin` of one. One pass over the spheres, where a tree of them all would cost
-    /// a build that grows with the box (1.7 s for the 2.1 million of a 129^3 grid).
-    pub(crate) fn spheres_reaching(&self, bounds: rfta_geom::Aabb, margin: f64) -> Vec<u32> {
-        use rayon::prelude::*;
-        let (lo, hi) = (self.to_unit(bounds.min), self.to_unit(bounds.max));
-        // Padded for the rounding of the conversion and of the distances.
-        let pad = 1e-9 * (1.0 + hi.abs().max(lo.abs()).max_element());
-        (0..self.len() as u32)
-            .into_par_iter()
-            .filter(|&i| {
-                let s = self.sphere(i as usize);
-                let reach = s.radius + margin + pad;
-                s.center.clamp(lo, hi).distance_squared(s.center) < reach * reach
-            })
-            .collect()
     }
 
     /// The box of the samples' positions, in the samples' coordinates.
@@ -410,46 +396,6 @@ mod tests {
         }
         assert!(found > 1000, "{found}");
         assert!(unit.samples_within(Aabb::EMPTY).is_empty());
-    }
-
-    /// Every sphere that holds a point of the box, or comes within the margin of one, is among
-    /// those `spheres_reaching` lists, and every listed one reaches that far (points drawn in
-    /// random boxes, against every sphere).
-    #[test]
-    fn spheres_reaching_a_box_hold_every_point_any_sphere_holds() {
-        let grid = Grid::new([8, 8, 8], DVec3::ZERO, DVec3::splat(0.25)).expect("grid");
-        // A sphere of radius 0.6 about (1, 1, 1): values of an exact distance.
-        let values = (0..grid.len())
-            .map(|i| (grid.position(i) - DVec3::ONE).length() - 0.6)
-            .collect();
-        let samples = SdfSamples::grid(grid, values).expect("samples");
-        let unit = UnitBox::new(&samples, None, None);
-        let margin = 0.25 * unit.spacing();
-        let mut rng = rfta_geom::rng::Rng::new(11);
-        let mut r = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-        let (mut listed, mut held) = (0, 0);
-        for _ in 0..200 {
-            let (a, b) = (r() * 2.0, r() * 0.3);
-            let bounds = Aabb::from_points(&[a, a + b]);
-            let near = unit.spheres_reaching(bounds, margin);
-            listed += near.len();
-            let (lo, hi) = (unit.to_unit(bounds.min), unit.to_unit(bounds.max));
-            for &i in &near {
-                let s = unit.sphere(i as usize);
-                let d = s.center.distance(s.center.clamp(lo, hi));
-                assert!(d < s.radius + margin + 1e-9, "sphere {i} listed at {d}");
-            }
-            for _ in 0..50 {
-                let x = unit.to_unit(bounds.min + r() * (bounds.max - bounds.min));
-                for (i, s) in unit.spheres().enumerate() {
-                    if s.center.distance(x) < s.radius + margin {
-                        held += 1;
-                        assert!(near.binary_search(&(i as u32)).is_ok(), "sphere {i} missed");
-                    }
-                }
-            }
-        }
-        assert!(listed > 1000 && held > 1000, "{listed} {held}");
     }
 
     /// The final solve's side points read off the samples are, index by index, every sample

@@ -10,6 +10,7 @@ use rfta_sphere_tree::SphereTree;
 
 use rfta_repair::{Island, signed_volume};
 
+use super::reach::Reach;
 use crate::normalize::UnitBox;
 use crate::{Params, consistency};
 
@@ -43,10 +44,12 @@ pub(super) fn inverted_and_unenclosed(
 }
 
 /// The verdict on one component (`faces` of `mesh`, in the samples' coordinates, within
-/// `bounds`); `main` indexes the largest component in the unit box.
+/// `bounds`); `blocks` holds `unit`'s spheres in blocks, `main` indexes the largest component in
+/// the unit box.
 pub(super) fn judge(
     unit: &UnitBox,
     params: &Params,
+    blocks: &Reach<'_>,
     main: Option<&rfta_mesh::MeshIndex>,
     mesh: &TriMesh,
     faces: &[usize],
@@ -62,7 +65,7 @@ pub(super) fn judge(
     // The spheres the tests below can meet: those that reach the component's box, or come
     // within the gap margin of it (closes_gap).
     let margin = consistency::GAP_MARGIN * unit.spacing();
-    let tree = SphereTree::with_indices(unit, &unit.spheres_reaching(bounds, margin));
+    let tree = SphereTree::with_indices(unit, &blocks.spheres_reaching(bounds, margin));
     let tol = params.tolerance;
     // A closed component stands for a solid (outward) or a cavity (inward): a sample inside it
     // of that sign witnesses it, however small it is. Computed at most once.

@@ -11,6 +11,7 @@
 
 pub(crate) mod handles;
 mod islands;
+mod reach;
 mod simplify;
 #[cfg(test)]
 mod tests;
@@ -228,8 +229,9 @@ fn components(plan: &Plan<'_>, mesh: TriMesh, journal: &mut Journal) -> (TriMesh
     let (unit, params) = (&plan.unit, &plan.params);
     crate::pool::waiters_back();
     let t = Instant::now();
-    // The largest component in the unit box and the whole mesh, indexed on first use.
-    let (main, whole) = (OnceLock::new(), OnceLock::new());
+    // The largest component in the unit box, the whole mesh and the spheres' blocks, indexed on
+    // first use.
+    let (main, whole, blocks) = (OnceLock::new(), OnceLock::new(), OnceLock::new());
     let (kept, removed) = remove_islands(
         &mesh,
         |faces| inverted_and_unenclosed(&mesh, faces, &whole),
@@ -241,7 +243,8 @@ fn components(plan: &Plan<'_>, mesh: TriMesh, journal: &mut Journal) -> (TriMesh
                 };
                 rfta_mesh::MeshIndex::new(&part).ok()
             });
-            judge(unit, params, main.as_ref(), &mesh, faces, bounds)
+            let blocks = blocks.get_or_init(|| reach::Reach::new(unit));
+            judge(unit, params, blocks, main.as_ref(), &mesh, faces, bounds)
         },
     );
     journal.timed(Step::Components, t);

@@ -7,6 +7,7 @@ use rfta_geom::{Aabb, shapes};
 use rfta_repair::{Island, clear_spheres, push_out_of_spheres, remove_islands};
 
 use super::islands::*;
+use super::reach::Reach;
 use super::*;
 use crate::Params;
 
@@ -222,7 +223,15 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
         let main = rfta_mesh::MeshIndex::new(&main).expect("index");
         let faces: Vec<usize> = (0..m.faces.len()).collect();
         let bounds = Aabb::from_points(&m.vertices);
-        judge(&unit, &params, Some(&main), m, &faces, bounds)
+        judge(
+            &unit,
+            &params,
+            &Reach::new(&unit),
+            Some(&main),
+            m,
+            &faces,
+            bounds,
+        )
     };
     assert_eq!(judge_on(&with_solid, &solid), None);
     // Without the small parts, the samples around them are large: inside their spheres.
@@ -279,7 +288,15 @@ fn a_small_component_stays_only_where_the_samples_enclose_it() {
     let faces: Vec<usize> = (0..piece.faces.len()).collect();
     let bounds = Aabb::from_points(&piece.vertices);
     assert_eq!(
-        judge(&unit, &keep, Some(&main), &piece, &faces, bounds),
+        judge(
+            &unit,
+            &keep,
+            &Reach::new(&unit),
+            Some(&main),
+            &piece,
+            &faces,
+            bounds
+        ),
         None
     );
     // Half a spacing off the thin part, the samples' spheres reach it no more.
