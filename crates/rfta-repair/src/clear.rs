@@ -77,9 +77,8 @@ pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
 /// them (a bulge at a corner, where many far spheres touch the same point), and the near ones are
 /// cut wherever the shape is sharper than the surface (edges, corners, thin parts).
 ///
-/// Each round finds every sphere (of `all`) the mesh enters by more than `depth` (in the spheres'
-/// frame): the first round every sphere, the later ones those entered before and those holding a
-/// vertex that moved. Where no vertex of the cutting face lies in the sphere, a vertex is put at
+/// Each round finds the spheres the mesh enters by more than `depth` (in the spheres' frame): the
+/// first round those of `among`, the later ones those entered before. Where no vertex of the cutting face lies in the sphere, a vertex is put at
 /// the face's point nearest the centre (`split_where_entered`). Then each vertex inside entered
 /// spheres moves along its normal (inward out of positive spheres, outward out of negative ones) or
 /// radially away from the deepest sphere's centre, whichever leaves all of them sooner
@@ -87,7 +86,12 @@ pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
 /// sign; the moves are taken without folding the surface ([`apply_moves`]). At most `CLEAR_ROUNDS`
 /// (6) rounds. Vertices move in index order, so the result does not depend on the thread count.
 /// Returns how many vertices were added.
-pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, depth: f64) -> usize {
+pub fn clear_spheres(
+    mesh: &mut TriMesh,
+    spheres: &Spheres<'_>,
+    among: Among<'_>,
+    depth: f64,
+) -> usize {
     use rayon::prelude::*;
     let reach = CLEAR_REACH * spheres.spacing;
     let mut added = 0;
@@ -98,7 +102,7 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
     for round in 0..CLEAR_ROUNDS {
         let part = in_frame(mesh, spheres);
         let previous = (round > 0).then_some(last.as_slice());
-        let Some(found) = entered(&part, &incident, spheres, previous, below, depth) else {
+        let Some(found) = entered(&part, &incident, spheres, previous, among, depth) else {
             break;
         };
         if found.is_empty() {
@@ -168,16 +172,26 @@ pub fn clear_spheres(mesh: &mut TriMesh, spheres: &Spheres<'_>, below: f64, dept
     added
 }
 
-/// The spheres smaller than `below` that `part` enters by more than `depth`, each with the point
-/// of `part` nearest its centre: every sphere the first round (`previous` none), the later ones
-/// only those entered before, around where they were entered (a vertex moves by at most
-/// `CLEAR_REACH`). `None` when `part` cannot be indexed.
+/// Which spheres [`clear_spheres`] looks at in its first round; the later rounds look again at
+/// those it found entered.
+#[derive(Debug, Clone, Copy)]
+pub enum Among<'a> {
+    /// Every sphere whose radius (in the spheres' frame) is below this.
+    SmallerThan(f64),
+    /// These spheres, by index (a check's findings).
+    These(&'a [u32]),
+}
+
+/// The spheres that `part` enters by more than `depth`, each with the point of `part` nearest its
+/// centre: those of `among` the first round (`previous` none), the later ones only those entered
+/// before, around where they were entered (a vertex moves by at most `CLEAR_REACH`). `None` when
+/// `part` cannot be indexed.
 fn entered(
     part: &TriMesh,
     incident: &Incidence,
     spheres: &Spheres<'_>,
     previous: Option<&[(u32, rfta_mesh::ClosestPoint)]>,
-    below: f64,
+    among: Among<'_>,
     depth: f64,
 ) -> Option<Vec<(u32, rfta_mesh::ClosestPoint)>> {
     use rayon::prelude::*;
@@ -189,14 +203,24 @@ fn entered(
     Some(match previous {
         None => {
             let index = rfta_mesh::MeshIndex::new(part).ok()?;
-            (0..spheres.spheres.len() as u32)
-                .into_par_iter()
-                .filter(|&i| spheres.spheres.radius(i as usize) < below)
-                .filter_map(|i| {
-                    let (c, lo) = entry(i)?;
-                    Some((i, index.closest_point_within(c, lo * lo)?))
-                })
-                .collect()
+            let nearest = |i: u32| {
+                let (c, lo) = entry(i)?;
+                Some((i, index.closest_point_within(c, lo * lo)?))
+            };
+            match among {
+                Among::SmallerThan(below) => (0..spheres.spheres.len() as u32)
+                    .into_par_iter()
+                    .filter(|&i| spheres.spheres.radius(i as usize) < below)
+                    .filter_map(nearest)
+                    .collect(),
+                Among::These(these) => {
+                    let mut these = these.to_vec();
+                    these.sort_unstable();
+                    these.dedup();
+                    these.retain(|&i| (i as usize) < spheres.spheres.len());
+                    these.into_par_iter().filter_map(nearest).collect()
+                }
+            }
         }
         Some(last) => last
             .par_iter()

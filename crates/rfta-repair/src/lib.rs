@@ -25,13 +25,13 @@
 //! # Example
 //! ```
 //! use rfta_geom::{glam::DVec3, shapes, Sphere};
-//! use rfta_repair::{Frame, Spheres, clear_spheres};
+//! use rfta_repair::{Among, Frame, Spheres, clear_spheres};
 //!
 //! // A ball of radius 1 and an outside sample whose sphere (radius 0.3) it enters by 0.2.
 //! let mut mesh = shapes::icosphere(1.0, 3);
 //! let spheres = [Sphere::new(DVec3::new(1.1, 0.0, 0.0), 0.3)];
 //! let set = Spheres { spheres: &spheres, values: &[0.3], frame: Frame::IDENTITY, spacing: 1.0 };
-//! clear_spheres(&mut mesh, &set, f64::INFINITY, 0.001);
+//! clear_spheres(&mut mesh, &set, Among::SmallerThan(f64::INFINITY), 0.001);
 //! assert!(mesh.vertices.iter().all(|v| v.distance(spheres[0].center) > 0.3 - 0.001 - 1e-9));
 //! ```
 
@@ -47,7 +47,7 @@ use rfta_geom::SphereSet;
 use rfta_geom::glam::DVec3;
 
 pub use cavities::{Openings, cavity_openings};
-pub use clear::{clear_spheres, push_out_of_spheres};
+pub use clear::{Among, clear_spheres, push_out_of_spheres};
 pub use components::{Island, remove_islands};
 pub use dent::dent_wrong_side;
 pub use edit::apply_moves;

@@ -6,8 +6,8 @@ use rfta_mesh::Incidence;
 use rfta_mesh::Topology;
 use rfta_repair::edit::Splitter;
 use rfta_repair::{
-    Frame, Island, Spheres, apply_moves, clear_spheres, cut_sub_cell_handles, dent_wrong_side,
-    face_components, remove_islands, signed_volume, to_genus,
+    Among, Frame, Island, Spheres, apply_moves, clear_spheres, cut_sub_cell_handles,
+    dent_wrong_side, face_components, remove_islands, signed_volume, to_genus,
 };
 
 /// The spacing of the dent tests' samples, and the pipeline's margin of a reliable side.
@@ -119,7 +119,7 @@ fn cleared_spheres_hold_no_vertex_and_the_rest_stays() {
         spacing: 1.0,
     };
     let depth = 0.001;
-    clear_spheres(&mut mesh, &set, f64::INFINITY, depth);
+    clear_spheres(&mut mesh, &set, Among::SmallerThan(f64::INFINITY), depth);
     for s in &spheres {
         for v in &mesh.vertices {
             assert!(v.distance(s.center) >= s.radius - depth - 1e-9, "{v}");
@@ -138,6 +138,36 @@ fn cleared_spheres_hold_no_vertex_and_the_rest_stays() {
     }
 }
 
+/// Only the spheres asked for: of the same two spheres, asking for the inside sample's (and for
+/// one past the set, which is ignored) clears it and leaves the outside sample's entered as deep
+/// as before.
+#[test]
+fn clearing_these_spheres_leaves_the_others() {
+    let mut mesh = shapes::icosphere(1.0, 3);
+    let spheres = [
+        Sphere::new(DVec3::new(1.1, 0.0, 0.0), 0.3),
+        Sphere::new(DVec3::new(0.0, 0.0, -1.1), 0.2),
+    ];
+    let set = Spheres {
+        spheres: &spheres,
+        values: &[0.3, -0.2],
+        frame: Frame::IDENTITY,
+        spacing: 1.0,
+    };
+    let deepest = |mesh: &TriMesh, s: &Sphere| {
+        mesh.vertices
+            .iter()
+            .map(|v| s.radius - v.distance(s.center))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let before = deepest(&mesh, &spheres[0]);
+    assert!(before > 0.15, "{before}");
+    let depth = 0.001;
+    clear_spheres(&mut mesh, &set, Among::These(&[1, 7]), depth);
+    assert!(deepest(&mesh, &spheres[1]) <= depth + 1e-9);
+    assert_eq!(deepest(&mesh, &spheres[0]), before);
+}
+
 /// A frame that is not the identity: the same spheres and mesh scaled by 4 and moved give the
 /// same mesh, scaled and moved (up to rounding; the sphere off every symmetry of the mesh, so
 /// that no two faces tie for nearest).
@@ -151,14 +181,19 @@ fn clearing_in_a_frame_is_clearing_in_the_mesh_coordinates() {
         spacing: 1.0,
     };
     let mut unit = shapes::icosphere(1.0, 3);
-    clear_spheres(&mut unit, &set, f64::INFINITY, 0.001);
+    clear_spheres(&mut unit, &set, Among::SmallerThan(f64::INFINITY), 0.001);
     let frame = Frame {
         origin: DVec3::new(0.5, -2.0, 8.0),
         scale: 4.0,
     };
     let mut moved = shapes::icosphere(1.0, 3);
     moved.map_vertices(|v| frame.to_mesh(v));
-    clear_spheres(&mut moved, &Spheres { frame, ..set }, f64::INFINITY, 0.001);
+    clear_spheres(
+        &mut moved,
+        &Spheres { frame, ..set },
+        Among::SmallerThan(f64::INFINITY),
+        0.001,
+    );
     assert_eq!(unit.vertices.len(), moved.vertices.len());
     assert!(unit.vertices.len() > shapes::icosphere(1.0, 3).vertices.len());
     for (a, b) in unit.vertices.iter().zip(&moved.vertices) {

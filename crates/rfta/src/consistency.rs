@@ -109,7 +109,7 @@ impl Consistency {
 /// # Errors
 /// [`Error::Consistency`] if the mesh cannot be indexed (no faces, non-finite vertices).
 pub fn measure(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Result<Consistency> {
-    measure_with(samples, mesh, &Topology::of(mesh), clamp)
+    Ok(measure_with(samples, mesh, &Topology::of(mesh), clamp)?.0)
 }
 
 /// Which samples [`measure`] counts: those on the wrong side of the mesh, those whose sphere it
@@ -162,19 +162,19 @@ pub fn marked(samples: &SdfSamples, mesh: &TriMesh, clamp: Option<f64>) -> Resul
 }
 
 /// [`measure`] with the mesh's topology already at hand (the pipeline computes it once for its
-/// mesh check and this).
+/// mesh check and this), and the samples whose spheres the mesh enters, ascending.
 pub(crate) fn measure_with(
     samples: &SdfSamples,
     mesh: &TriMesh,
     topology: &Topology,
     clamp: Option<f64>,
-) -> Result<Consistency> {
+) -> Result<(Consistency, Vec<usize>)> {
     let h = samples.spacing();
     let clamp = clamp.unwrap_or(f64::INFINITY);
     let values = samples.values();
     if mesh.faces.is_empty() {
         // No surface: every negative sample is on the wrong side, every unclamped one has a gap.
-        return Ok(Consistency {
+        let c = Consistency {
             samples: samples.len(),
             spacing: h,
             sign_errors: values.iter().filter(|&&s| s < -SIGN_MARGIN * h).count(),
@@ -182,7 +182,8 @@ pub(crate) fn measure_with(
             gaps: values.iter().filter(|s| s.abs() < clamp).count(),
             deepest_entry: 0.0,
             thin_loops: Vec::new(),
-        });
+        };
+        return Ok((c, Vec::new()));
     }
     let index = MeshIndex::new(mesh)?;
     let closed =
@@ -201,15 +202,18 @@ pub(crate) fn measure_with(
         Some(grid) => check.grid(grid, values),
         None => check.each(&samples.positions(), values),
     };
-    Ok(Consistency {
+    let c = Consistency {
         samples: samples.len(),
         spacing: h,
         sign_errors: found.sign_errors,
-        entered: found.entered,
+        entered: found.entered.len(),
         gaps: found.gaps,
         deepest_entry: found.deepest_entry,
         thin_loops: thin_loops(mesh, topology, h),
-    })
+    };
+    let mut entered = found.entered;
+    entered.sort_unstable();
+    Ok((c, entered))
 }
 
 /// Above this genus [`Consistency::thin_loops`] is not searched: the search keeps a class of
@@ -239,20 +243,24 @@ struct Check<'a> {
     clamp: f64,
 }
 
-/// Counts over samples, summed in any order to the same result.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+/// Counts over samples, summed in order (so the same whatever the thread count), with the
+/// samples whose spheres are entered.
+#[derive(Debug, Clone, Default, PartialEq)]
 struct Counts {
     sign_errors: usize,
-    entered: usize,
+    /// Ascending.
+    entered: Vec<usize>,
     gaps: usize,
     deepest_entry: f64,
 }
 
 impl Counts {
-    fn add(self, o: Counts) -> Counts {
+    /// `self` then `o` (whose samples come after `self`'s).
+    fn add(mut self, mut o: Counts) -> Counts {
+        self.entered.append(&mut o.entered);
         Counts {
             sign_errors: self.sign_errors + o.sign_errors,
-            entered: self.entered + o.entered,
+            entered: self.entered,
             gaps: self.gaps + o.gaps,
             deepest_entry: self.deepest_entry.max(o.deepest_entry),
         }
@@ -337,7 +345,11 @@ impl Check<'_> {
                 };
                 Counts {
                     sign_errors: usize::from(sign_error),
-                    entered: usize::from(entry > ENTER_MARGIN * h),
+                    entered: if entry > ENTER_MARGIN * h {
+                        vec![i]
+                    } else {
+                        Vec::new()
+                    },
                     gaps: usize::from(s.abs() < clamp && d > s.abs() + GAP_MARGIN * h),
                     deepest_entry: entry.max(0.0) / h.max(f64::MIN_POSITIVE),
                 }
@@ -364,12 +376,11 @@ impl Check<'_> {
                     let i = c * CHUNK + k;
                     let d = self.distance(grid.position(i), values[i]);
                     *e = d.empty;
-                    counts = counts.add(Counts {
-                        sign_errors: 0,
-                        entered: usize::from(d.entered),
-                        gaps: usize::from(d.gap),
-                        deepest_entry: d.entry,
-                    });
+                    if d.entered {
+                        counts.entered.push(i);
+                    }
+                    counts.gaps += usize::from(d.gap);
+                    counts.deepest_entry = counts.deepest_entry.max(d.entry);
                 }
                 counts
             })
@@ -507,15 +518,18 @@ mod tests {
 
     /// A surface inflated by `e`: a sample at distance `t = |p|` from the centre is `|t - R|` from
     /// it. Counted from that formula, with no sample within 5e-4 of a margin (checked) so the
-    /// tessellation cannot tip one.
+    /// tessellation cannot tip one; the samples found entered are those the formula says.
     #[test]
     fn an_inflated_surface_is_counted_sample_by_sample() {
         let samples = ball_grid();
         let radius = 0.5 + 0.037;
-        let c = measure(&samples, &shapes::icosphere(radius, 5), None).expect("measure");
+        let mesh = shapes::icosphere(radius, 5);
+        let (c, entered_at) =
+            measure_with(&samples, &mesh, &Topology::of(&mesh), None).expect("measure");
         let h = 0.1;
         let (mut wrong, mut entered, mut gaps) = (0, 0, 0);
-        for (p, &s) in samples.positions().iter().zip(samples.values()) {
+        let mut by_formula = Vec::new();
+        for (i, (p, &s)) in samples.positions().iter().zip(samples.values()).enumerate() {
             let d = (p.length() - radius).abs();
             let inside = p.length() < radius;
             for edge in [
@@ -527,6 +541,9 @@ mod tests {
             }
             wrong += usize::from(s.abs() > SIGN_MARGIN * h && inside != (s < 0.0));
             entered += usize::from(d < s.abs() - ENTER_MARGIN * h);
+            if d < s.abs() - ENTER_MARGIN * h {
+                by_formula.push(i);
+            }
             gaps += usize::from(d > s.abs() + GAP_MARGIN * h);
         }
         // Outside samples are entered by 0.037 (more than 0.01), inside ones are 0.037 farther
@@ -537,6 +554,7 @@ mod tests {
             "{entered} {gaps} {wrong}"
         );
         assert_eq!((c.sign_errors, c.entered, c.gaps), (wrong, entered, gaps));
+        assert_eq!(entered_at, by_formula);
         assert!((c.deepest_entry - 0.37).abs() < 0.01, "{}", c.deepest_entry);
     }
 
@@ -585,7 +603,7 @@ mod tests {
             let by_groups = check.grid(grid, samples.values());
             let each = check.each(&samples.positions(), samples.values());
             assert!(
-                by_groups.sign_errors > 10 && by_groups.entered > 10,
+                by_groups.sign_errors > 10 && by_groups.entered.len() > 10,
                 "{by_groups:?}"
             );
             assert_eq!(by_groups.sign_errors, each.sign_errors);

@@ -64,7 +64,8 @@ pub enum Step {
     Cavities,
     /// The repaired mesh simplified.
     Simplify,
-    /// The mesh check and the consistency check.
+    /// The mesh check and the consistency check (with the spheres it finds entered cleared and
+    /// checked again).
     Consistency,
 }
 

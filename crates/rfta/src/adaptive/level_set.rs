@@ -176,7 +176,7 @@ pub(super) fn agree_with_asked(
 ) -> Result<()> {
     let mesh = &reconstruction.mesh;
     let topology = rfta_mesh::Topology::of(mesh);
-    let c = crate::consistency::measure_with(asked, mesh, &topology, None)?;
+    let (c, _) = crate::consistency::measure_with(asked, mesh, &topology, None)?;
     let report = &mut reconstruction.report;
     report.consistency = crate::Consistency {
         thin_loops: std::mem::take(&mut report.consistency.thin_loops),

@@ -3,8 +3,8 @@
 //! samples on the wrong side dented past, sample spheres cleared, a known genus reached; the
 //! repaired mesh), the cavities the samples leave open opened ([`open_cavities`]: solved and
 //! repaired again with points kept outside in their walls) and the verdict ([`verdict`]: the
-//! mesh checked, measured against every sample, and what the caller should know put in the
-//! report).
+//! mesh measured against every sample, the spheres it still enters cleared, checked, and what the
+//! caller should know put in the report).
 //!
 //! The repair steps are `rfta-repair`'s; `islands.rs` holds the verdicts it removes components
 //! by.
@@ -33,8 +33,8 @@ use crate::{
 
 use islands::{inverted_and_unenclosed, judge};
 use rfta_repair::{
-    CUT_GAP, Island, clear_spheres, cut_sub_cell_handles, dent_wrong_side, push_out_of_spheres,
-    remove_islands, to_genus,
+    Among, CUT_GAP, Island, clear_spheres, cut_sub_cell_handles, dent_wrong_side,
+    push_out_of_spheres, remove_islands, to_genus,
 };
 pub(crate) use simplify::simplify;
 
@@ -48,7 +48,9 @@ pub(crate) const PUSH_DEPTH: f64 = 0.02;
 /// along the same normal enters a bulge at most by a few hundredths of a spacing more (a bulge `w`
 /// wide enters a sphere of radius `t` by about its height less `w^2 / 2t`): below the margin at
 /// which the consistency check ([`crate::consistency`]) counts an entry, where the many far
-/// spheres' queries would cost most (nine in ten of the 129^3 bunny's samples).
+/// spheres' queries would cost most (nine in ten of the 129^3 bunny's samples). Where a wider
+/// sphere is entered after all (thingi54725 at 257^3: 42 of 10 to 18 spacings, along an edge),
+/// the verdict's check finds it and clears it ([`clear_entered`]).
 pub(crate) const CLEAR_BELOW: f64 = 3.0;
 
 /// The last solve on the final points (every sample a side point): its mesh at the working
@@ -335,7 +337,7 @@ fn repair_once(
         report.vertices_added = clear_spheres(
             &mut mesh,
             &spheres,
-            CLEAR_BELOW * r_own,
+            Among::SmallerThan(CLEAR_BELOW * r_own),
             PUSH_DEPTH * unit.spacing(),
         );
     }
@@ -372,7 +374,8 @@ pub(crate) fn verdict(
     mut report: Report,
     mut journal: Journal,
 ) -> Result<Reconstruction> {
-    (report.mesh, report.consistency) = measure(plan, &mesh, &report, &mut journal)?;
+    let (mesh, checked, consistency) = measure(plan, mesh, &mut report, &mut journal)?;
+    (report.mesh, report.consistency) = (checked, consistency);
     report.warnings = journal.warnings;
     report.timings = journal.timings;
     Ok(plan.to_caller(Reconstruction {
@@ -382,21 +385,28 @@ pub(crate) fn verdict(
     }))
 }
 
-/// The output mesh, read with the stages' reports: checked ([`check::mesh`]) and measured
-/// against every sample ([`consistency::measure_with`]), and a warning for each thing the caller
-/// should know.
+/// The output mesh, read with the stages' reports: measured against every sample
+/// ([`consistency::measure_with`]; the spheres it enters cleared, [`clear_entered`]) and checked
+/// ([`check::mesh`]), and a warning for each thing the caller should know.
 fn measure(
     plan: &Plan<'_>,
-    mesh: &TriMesh,
-    report: &Report,
+    mut mesh: TriMesh,
+    report: &mut Report,
     journal: &mut Journal,
-) -> Result<(MeshCheck, Consistency)> {
+) -> Result<(TriMesh, MeshCheck, Consistency)> {
     let (samples, params) = (&*plan.samples, &plan.params);
     crate::pool::waiters_back();
     let t = Instant::now();
-    let topology = rfta_mesh::Topology::of(mesh);
-    let checked = check::mesh(mesh, &topology)?;
-    let c = consistency::measure_with(samples, mesh, &topology, report.input.clamp)?;
+    let mut topology = rfta_mesh::Topology::of(&mesh);
+    let (mut c, entered) =
+        consistency::measure_with(samples, &mesh, &topology, report.input.clamp)?;
+    let reading = plan.field.read_as;
+    if !entered.is_empty() && reading.spheres_bind() {
+        let cleared = clear_entered(plan, mesh, c, entered, report)?;
+        (mesh, c) = cleared;
+        topology = rfta_mesh::Topology::of(&mesh);
+    }
+    let checked = check::mesh(&mesh, &topology)?;
     journal.timed(Step::Consistency, t);
     let n = samples.len();
     if let Some(genus) = params.genus {
@@ -414,7 +424,6 @@ fn measure(
     }
     // A level set's values are not distances: a sphere the surface enters is no disagreement,
     // nor is a sphere without a point (nor for bounds, whose spheres others may cover).
-    let reading = plan.field.read_as;
     let disagrees = if !reading.spheres_bind() {
         c.sign_errors > 0
     } else {
@@ -461,5 +470,56 @@ fn measure(
             degenerate: checked.degenerate_faces,
         });
     }
-    Ok((checked, c))
+    Ok((mesh, checked, c))
+}
+
+/// Times [`clear_entered`] clears the spheres the check still finds entered and checks again.
+const RECLEARS: usize = 2;
+
+/// The spheres the check of the output (`c`) found entered, `entered` (of any size: the repair's
+/// clearing looks only at those below [`CLEAR_BELOW`] owner radii, and an edge or a corner of a
+/// thin part can bulge into wider ones), cleared ([`clear_spheres`]), the samples that leaves on
+/// the wrong side dented past, and the mesh checked again: kept when it enters fewer spheres and
+/// puts no more samples on the wrong side, at most [`RECLEARS`] times. The repair's counts grow
+/// by what was moved and added.
+fn clear_entered(
+    plan: &Plan<'_>,
+    mut mesh: TriMesh,
+    mut c: Consistency,
+    mut entered: Vec<usize>,
+    report: &mut Report,
+) -> Result<(TriMesh, Consistency)> {
+    let (samples, unit) = (&*plan.samples, &plan.unit);
+    let h = samples.spacing();
+    for _ in 0..RECLEARS {
+        if entered.is_empty() {
+            break;
+        }
+        let mut next = mesh.clone();
+        let these: Vec<u32> = entered.iter().map(|&i| i as u32).collect();
+        let added = clear_spheres(
+            &mut next,
+            &unit.sphere_set(),
+            Among::These(&these),
+            PUSH_DEPTH * unit.spacing(),
+        );
+        let dents = dent_wrong_side(&mut next, samples, h, consistency::SIGN_MARGIN);
+        let topology = rfta_mesh::Topology::of(&next);
+        let (again, still) =
+            consistency::measure_with(samples, &next, &topology, report.input.clamp)?;
+        if again.sign_errors > c.sign_errors || again.entered >= c.entered {
+            break;
+        }
+        let moved = mesh
+            .vertices
+            .iter()
+            .zip(&next.vertices)
+            .filter(|(a, b)| a != b)
+            .count();
+        report.repair.vertices_pushed_out += moved + added;
+        report.repair.vertices_added += added;
+        report.repair.dents += dents;
+        (mesh, c, entered) = (next, again, still);
+    }
+    Ok((mesh, c))
 }

@@ -4,7 +4,7 @@
 use rfta_geom::glam::DVec3;
 use rfta_geom::{Aabb, shapes};
 
-use rfta_repair::{Island, clear_spheres, push_out_of_spheres, remove_islands};
+use rfta_repair::{Among, Island, clear_spheres, push_out_of_spheres, remove_islands};
 
 use super::islands::*;
 use super::reach::Reach;
@@ -112,7 +112,12 @@ fn cleared_spheres_are_left_by_faces_too() {
         deepest_entry(&unit, &mesh)
     );
     let depth = PUSH_DEPTH * unit.spacing();
-    let added = clear_spheres(&mut mesh, &unit.sphere_set(), f64::INFINITY, depth);
+    let added = clear_spheres(
+        &mut mesh,
+        &unit.sphere_set(),
+        Among::SmallerThan(f64::INFINITY),
+        depth,
+    );
     assert!(added > 0);
     let entry = deepest_entry(&unit, &mesh);
     assert!(entry < consistency::ENTER_MARGIN, "{entry}");
@@ -363,4 +368,29 @@ fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
     for step in [Step::SpheresCleared, Step::Consistency] {
         assert!(!steps.contains(&step), "{step:?} in {steps:?}");
     }
+}
+
+/// A surface a third of a spacing too large around the ball of radius 0.5 (grid spacing 0.1)
+/// enters the outside samples' spheres, the far ones wider than the repair's clearing looks at
+/// (`CLEAR_BELOW` owner radii) too. The verdict's check finds them and clears them: the mesh it
+/// returns enters none by the check's margin, the counts it reports are the check of that mesh,
+/// and the repair's counts grew by what moved.
+#[test]
+fn the_verdict_clears_the_spheres_it_finds_entered_of_any_size() {
+    let samples = ball_grid();
+    let mut journal = Journal::default();
+    let plan = Plan::new(&samples, &Params::default(), &mut journal).expect("plan");
+    let mesh = shapes::icosphere(0.53, 3);
+    let marked = consistency::marked(&samples, &mesh, None).expect("marked");
+    let wide = CLEAR_BELOW * plan.owner_radius;
+    assert!(marked.entered.iter().any(|&i| plan.unit.radius(i) > wide));
+    let mut report = Report::default();
+    let (mesh, checked, c) = measure(&plan, mesh, &mut report, &mut journal).expect("verdict");
+    assert_eq!((c.entered, c.sign_errors), (0, 0), "{c:?}");
+    assert_eq!(
+        c,
+        consistency::measure(&samples, &mesh, None).expect("measure")
+    );
+    assert!(checked.watertight && checked.genus == Some(0));
+    assert!(report.repair.vertices_pushed_out > 0);
 }
