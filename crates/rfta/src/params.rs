@@ -254,9 +254,10 @@ pub(crate) const ROUNDS: usize = 10;
 /// 0.000615 against 0.000612 at 129^3, 0.000258 against 0.000259 at 257^3 (bunny, fandisk,
 /// knight), every genus right in one piece, nothing on the wrong side, no sphere entered (ten
 /// rounds entered one at 101^3), in about a third less time (docs/speed.md, item 45). On all
-/// eight dev shapes at 257^3 one shape is worse: thingi54725 enters 42 spheres by at most 0.114
-/// spacings where ten rounds (and one or two) enter none (docs/speed.md, 2026-12-07, night). On
-/// coarser grids fewer rounds lost accuracy and topology (51^3 and below), so they keep ten.
+/// eight dev shapes at 257^3 one shape was worse: thingi54725's repaired mesh entered 42 wide
+/// spheres by at most 0.114 spacings where ten rounds (and one or two) entered none, which the
+/// verdict now clears (docs/speed.md, 2026-12-07, night and late night). On coarser grids fewer
+/// rounds lost accuracy and topology (51^3 and below), so they keep ten.
 pub(crate) const FINE_GRID_ROUNDS: usize = 3;
 
 /// The deepest Poisson solve whose rounds run as the reference's; beyond it they solve one depth
