@@ -78,14 +78,15 @@ pub(crate) fn in_frame(mesh: &TriMesh, spheres: &Spheres<'_>) -> TriMesh {
 /// cut wherever the shape is sharper than the surface (edges, corners, thin parts).
 ///
 /// Each round finds the spheres the mesh enters by more than `depth` (in the spheres' frame): the
-/// first round those of `among`, the later ones those entered before. Where no vertex of the cutting face lies in the sphere, a vertex is put at
-/// the face's point nearest the centre (`split_where_entered`). Then each vertex inside entered
-/// spheres moves along its normal (inward out of positive spheres, outward out of negative ones) or
-/// radially away from the deepest sphere's centre, whichever leaves all of them sooner
-/// (`leave_along`), as long as that is within `CLEAR_REACH` (0.5) and meets no sphere of the other
-/// sign; the moves are taken without folding the surface ([`apply_moves`]). At most `CLEAR_ROUNDS`
-/// (6) rounds. Vertices move in index order, so the result does not depend on the thread count.
-/// Returns how many vertices were added.
+/// first round those of `among`, the later ones those entered before. Where no vertex of the
+/// cutting face lies in the sphere, a vertex is put at the face's point nearest the centre
+/// (`split_where_entered`). Then each vertex inside entered spheres moves along its normal
+/// (inward out of positive spheres, outward out of negative ones) or radially away from the
+/// deepest sphere's centre, whichever leaves all of them sooner (`leave_along`), as long as that
+/// is within `CLEAR_REACH` (0.5) and meets no sphere of the other sign; the moves are taken
+/// without folding the surface ([`apply_moves`]). At most `CLEAR_ROUNDS` (6) rounds. Vertices
+/// move in index order, so the result does not depend on the thread count. Returns how many
+/// vertices were added.
 pub fn clear_spheres(
     mesh: &mut TriMesh,
     spheres: &Spheres<'_>,
@@ -178,7 +179,7 @@ pub fn clear_spheres(
 pub enum Among<'a> {
     /// Every sphere whose radius (in the spheres' frame) is below this.
     SmallerThan(f64),
-    /// These spheres, by index (a check's findings).
+    /// These spheres, by index (a check's findings); indices past the set are ignored.
     These(&'a [u32]),
 }
 
