@@ -283,6 +283,10 @@ pub struct RepairReport {
     /// Faces split so that a sample near the surface whose small sphere they cut lies on its own
     /// side (a dent; see `finish::dent_wrong_side`).
     pub dents: usize,
+    /// Spheres the check of the output found entered and the verdict then cleared (of any size:
+    /// the repair's clearing looks only at those up to a few owner radii, and the simplification
+    /// keeps only what it is given); their vertices are counted in `vertices_pushed_out`.
+    pub spheres_cleared_at_check: usize,
     /// Components joined to the largest by a tube to reach [`crate::Params::genus`] (0 without
     /// it).
     pub components_joined: usize,
@@ -356,6 +360,12 @@ impl Report {
             out.push(format!(
                 "moved {} vertices out of the sample spheres they entered ({} of them added where a face cut a sphere with no vertex inside)",
                 r.vertices_pushed_out, r.vertices_added
+            ));
+        }
+        if r.spheres_cleared_at_check > 0 {
+            out.push(format!(
+                "cleared {} sample sphere(s) the check of the output found entered",
+                r.spheres_cleared_at_check
             ));
         }
         if r.dents > 0 {

@@ -481,7 +481,7 @@ const RECLEARS: usize = 2;
 /// thin part can bulge into wider ones), cleared ([`clear_spheres`]), the samples that leaves on
 /// the wrong side dented past, and the mesh checked again: kept when it enters fewer spheres and
 /// puts no more samples on the wrong side, at most [`RECLEARS`] times. The repair's counts grow
-/// by what was moved and added.
+/// by what was moved, added and cleared.
 fn clear_entered(
     plan: &Plan<'_>,
     mut mesh: TriMesh,
@@ -519,6 +519,7 @@ fn clear_entered(
         report.repair.vertices_pushed_out += moved + added;
         report.repair.vertices_added += added;
         report.repair.dents += dents;
+        report.repair.spheres_cleared_at_check += c.entered - again.entered;
         (mesh, c, entered) = (next, again, still);
     }
     Ok((mesh, c))

@@ -374,7 +374,7 @@ fn a_guide_pass_ends_at_the_solve_with_the_components_removed() {
 /// enters the outside samples' spheres, the far ones wider than the repair's clearing looks at
 /// (`CLEAR_BELOW` owner radii) too. The verdict's check finds them and clears them: the mesh it
 /// returns enters none by the check's margin, the counts it reports are the check of that mesh,
-/// and the repair's counts grew by what moved.
+/// and the repair's counts grew by what moved and by every sphere found entered.
 #[test]
 fn the_verdict_clears_the_spheres_it_finds_entered_of_any_size() {
     let samples = ball_grid();
@@ -384,6 +384,9 @@ fn the_verdict_clears_the_spheres_it_finds_entered_of_any_size() {
     let marked = consistency::marked(&samples, &mesh, None).expect("marked");
     let wide = CLEAR_BELOW * plan.owner_radius;
     assert!(marked.entered.iter().any(|&i| plan.unit.radius(i) > wide));
+    let found = consistency::measure(&samples, &mesh, None)
+        .expect("measure")
+        .entered;
     let mut report = Report::default();
     let (mesh, checked, c) = measure(&plan, mesh, &mut report, &mut journal).expect("verdict");
     assert_eq!((c.entered, c.sign_errors), (0, 0), "{c:?}");
@@ -393,4 +396,5 @@ fn the_verdict_clears_the_spheres_it_finds_entered_of_any_size() {
     );
     assert!(checked.watertight && checked.genus == Some(0));
     assert!(report.repair.vertices_pushed_out > 0);
+    assert_eq!(report.repair.spheres_cleared_at_check, found);
 }
