@@ -585,10 +585,10 @@ mod tests {
             keys,
             "a key repeated: {text}"
         );
-        // The stages' 4 + 7 + 4 + 4 + 15 fields, how the values read 5, the simplification's 2
+        // The stages' 4 + 7 + 4 + 4 + 16 fields, how the values read 5, the simplification's 2
         // (its output faces left to the mesh), the mesh check's 7, the consistency check's 6 (its
         // sample count left to the input's), warnings and timings.
-        assert_eq!(keys, 4 + 7 + 4 + 4 + 15 + 5 + 2 + 7 + 6 + 2, "{text}");
+        assert_eq!(keys, 4 + 7 + 4 + 4 + 16 + 5 + 2 + 7 + 6 + 2, "{text}");
     }
 
     #[test]
