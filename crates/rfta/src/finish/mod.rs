@@ -402,9 +402,7 @@ fn measure(
         consistency::measure_with(samples, &mesh, &topology, report.input.clamp)?;
     let reading = plan.field.read_as;
     if !entered.is_empty() && reading.spheres_bind() {
-        let cleared = clear_entered(plan, mesh, c, entered, report)?;
-        (mesh, c) = cleared;
-        topology = rfta_mesh::Topology::of(&mesh);
+        (mesh, topology, c) = clear_entered(plan, (mesh, topology, c), entered, report)?;
     }
     let checked = check::mesh(&mesh, &topology)?;
     journal.timed(Step::Consistency, t);
@@ -476,19 +474,20 @@ fn measure(
 /// Times [`clear_entered`] clears the spheres the check still finds entered and checks again.
 const RECLEARS: usize = 2;
 
-/// The spheres the check of the output (`c`) found entered, `entered` (of any size: the repair's
-/// clearing looks only at those below [`CLEAR_BELOW`] owner radii, and an edge or a corner of a
-/// thin part can bulge into wider ones), cleared ([`clear_spheres`]), the samples that leaves on
-/// the wrong side dented past, and the mesh checked again: kept when it enters fewer spheres and
-/// puts no more samples on the wrong side, at most [`RECLEARS`] times. The repair's counts grow
-/// by what was moved, added and cleared.
+/// The spheres the check of the output (`checked`: the mesh, its topology and the check's counts)
+/// found entered, `entered` (of any size: the repair's clearing looks only at those below
+/// [`CLEAR_BELOW`] owner radii, and an edge or a corner of a thin part can bulge into wider ones),
+/// cleared ([`clear_spheres`]), the samples that leaves on the wrong side dented past, and the
+/// mesh checked again: kept, with its topology and counts, when it enters fewer spheres and puts
+/// no more samples on the wrong side, at most [`RECLEARS`] times. The repair's counts grow by
+/// what was moved, added and cleared.
 fn clear_entered(
     plan: &Plan<'_>,
-    mut mesh: TriMesh,
-    mut c: Consistency,
+    checked: (TriMesh, rfta_mesh::Topology, Consistency),
     mut entered: Vec<usize>,
     report: &mut Report,
-) -> Result<(TriMesh, Consistency)> {
+) -> Result<(TriMesh, rfta_mesh::Topology, Consistency)> {
+    let (mut mesh, mut topology, mut c) = checked;
     let (samples, unit) = (&*plan.samples, &plan.unit);
     let h = samples.spacing();
     for _ in 0..RECLEARS {
@@ -503,24 +502,25 @@ fn clear_entered(
             Among::These(&these),
             PUSH_DEPTH * unit.spacing(),
         );
-        let dents = dent_wrong_side(&mut next, samples, h, consistency::SIGN_MARGIN);
-        let topology = rfta_mesh::Topology::of(&next);
-        let (again, still) =
-            consistency::measure_with(samples, &next, &topology, report.input.clamp)?;
-        if again.sign_errors > c.sign_errors || again.entered >= c.entered {
-            break;
-        }
+        // Counted before the dents, which move vertices too.
         let moved = mesh
             .vertices
             .iter()
             .zip(&next.vertices)
             .filter(|(a, b)| a != b)
             .count();
+        let dents = dent_wrong_side(&mut next, samples, h, consistency::SIGN_MARGIN);
+        let next_topology = rfta_mesh::Topology::of(&next);
+        let (again, still) =
+            consistency::measure_with(samples, &next, &next_topology, report.input.clamp)?;
+        if again.sign_errors > c.sign_errors || again.entered >= c.entered {
+            break;
+        }
         report.repair.vertices_pushed_out += moved + added;
         report.repair.vertices_added += added;
         report.repair.dents += dents;
         report.repair.spheres_cleared_at_check += c.entered - again.entered;
-        (mesh, c, entered) = (next, again, still);
+        (mesh, topology, c, entered) = (next, next_topology, again, still);
     }
-    Ok((mesh, c))
+    Ok((mesh, topology, c))
 }
