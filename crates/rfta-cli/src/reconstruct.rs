@@ -161,9 +161,9 @@ pub(crate) struct Tuning {
     #[arg(long)]
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     keep_thin_handles: bool,
-    /// On a grid, spheres farther than this many grid spacings from the surface own no tangency
-    /// point (they stay constraints); 0 gives every sphere points, as the reference (scattered
-    /// samples always do).
+    /// Spheres farther than this many sample spacings from the surface own no tangency point
+    /// (they stay constraints): a grid's spacing, or each scattered sample's own (the distance to
+    /// its fourth nearest sample); 0 gives every sphere points, as the reference.
     #[arg(long, value_name = "SPACINGS", value_parser = crate::ui::parse_non_negative)]
     #[serde(skip_serializing_if = "Option::is_none")]
     owner_band: Option<f64>,

@@ -66,8 +66,9 @@ pub struct Params {
     /// Maximum points per sphere (3; the paper's Table 2 used 30).
     pub n_max: usize,
     /// Spheres at least this large (as given, before [`Params::owner_scale`]) get no point: those
-    /// of a clamped SDF, and any the caller keeps as constraints only (the pipeline's owner band);
-    /// `+inf` for none.
+    /// of a clamped SDF, and any the caller keeps as constraints only (the pipeline's owner band
+    /// on a grid); `+inf` for none. Nor do spheres the set says it does not let own points
+    /// ([`SphereSet::owns`]).
     pub owner_radius: f64,
     /// A cut is severe when the mesh comes within `severe * r` of the centre (0.8).
     pub severe: f64,
@@ -335,8 +336,8 @@ pub fn transport(
 /// Initial tangency points of one sign set (`set`: indices into `spheres` / `values`): for each
 /// sphere, the empty-space sample nearest its centre projected onto it, then [`local_search`]
 /// against `tree` (a batch of the same sign set). Spheres that end infeasible, reach
-/// [`Params::owner_radius`], or have zero radius (a sample exactly on the surface gives no
-/// normal) get no point. With `done`, 1 is added to it as each sphere of `set` is finished (for
+/// [`Params::owner_radius`], are not owners ([`SphereSet::owns`]) or have zero radius (a sample
+/// exactly on the surface gives no normal) get no point. With `done`, 1 is added to it as each sphere of `set` is finished (for
 /// progress reports from another thread; the result does not depend on it).
 pub fn initial_points(
     spheres: &(impl SphereSet + ?Sized),
@@ -361,7 +362,8 @@ pub fn initial_points(
             let s = params.owner(spheres.sphere(i as usize));
             let v = values[i as usize];
             // Owners are chosen by their radius as constraints, the caller's measure.
-            if spheres.radius(i as usize) >= params.owner_radius || s.radius <= 0.0 {
+            let owner = spheres.owns(i as usize);
+            if !owner || spheres.radius(i as usize) >= params.owner_radius || s.radius <= 0.0 {
                 return Vec::new();
             }
             let nn = kd
@@ -429,7 +431,7 @@ pub fn fine_tune(
     let owners: Vec<u32> = (0..spheres.len() as u32)
         .filter(|&i| {
             let r = spheres.radius(i as usize);
-            r < params.owner_radius && r * params.owner_scale > 0.0
+            r < params.owner_radius && r * params.owner_scale > 0.0 && spheres.owns(i as usize)
         })
         .collect();
     if let Some(done) = done {

@@ -210,6 +210,79 @@ fn fine_tuning_against_the_true_surface_pulls_points_onto_it() {
     assert!(mean < 2e-3, "mean distance {mean}");
 }
 
+/// Spheres of a set that keeps every other one as a constraint only.
+struct EveryOther<'a>(&'a [Sphere]);
+
+impl rfta_geom::SphereSet for EveryOther<'_> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn sphere(&self, i: usize) -> Sphere {
+        self.0[i]
+    }
+
+    fn owns(&self, i: usize) -> bool {
+        i.is_multiple_of(2)
+    }
+}
+
+/// A sphere its set says owns nothing gets no point, initial or fine-tuned, while the others get
+/// theirs as with a set that lets every sphere own.
+#[test]
+fn spheres_the_set_keeps_as_constraints_own_no_point() {
+    let (spheres, values) = sphere_grid();
+    let params = Params {
+        k_search: Params::k_search_for(spheres.len()),
+        ..Params::default()
+    };
+    let tree = SphereTree::new(&spheres);
+    let set = EveryOther(&spheres);
+    let outside: Vec<u32> = (0..spheres.len() as u32)
+        .filter(|&i| values[i as usize] > 0.0)
+        .collect();
+    let empty: Vec<DVec3> = (0..40)
+        .flat_map(|i| (0..40).flat_map(move |j| (0..40).map(move |k| (i, j, k))))
+        .map(|(i, j, k)| (DVec3::new(i as f64, j as f64, k as f64) + 0.5) / 40.0)
+        .filter(|p| spheres.iter().all(|s| (*p - s.center).length() > s.radius))
+        .collect();
+    let all = initial_points(&spheres, &values, &outside, &empty, &tree, &params, None);
+    let some = initial_points(&set, &values, &outside, &empty, &tree, &params, None);
+    let even = |c: &TangentPoints| c.owners.iter().filter(|&&o| o % 2 == 0).count();
+    assert!(some.owners.iter().all(|&o| o % 2 == 0), "{:?}", some.owners);
+    assert_eq!(some.len(), even(&all));
+    assert!(
+        some.len() > 10 && some.len() < all.len(),
+        "{} of {}",
+        some.len(),
+        all.len()
+    );
+    let mut mesh = shapes::icosphere(0.3, 4);
+    mesh.map_vertices(|v| v + DVec3::splat(0.5));
+    let tuned = fine_tune(
+        &set,
+        &values,
+        &mesh,
+        &some,
+        Tested::No,
+        &tree,
+        &params,
+        None,
+    );
+    let tuned_all = fine_tune(
+        &spheres,
+        &values,
+        &mesh,
+        &all,
+        Tested::No,
+        &tree,
+        &params,
+        None,
+    );
+    assert!(tuned.owners.iter().all(|&o| o % 2 == 0));
+    assert!(tuned.len() > 10 && tuned.len() < tuned_all.len());
+}
+
 /// The reference's transport, by brute force: halve the step until no other sphere holds the
 /// point by more than `tol`, `q` when every halving fails.
 fn transport_by_halving(

@@ -57,6 +57,13 @@ pub trait SphereSet: Sync {
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// Whether sphere `i` may own tangency points: every sphere, unless the set keeps some as
+    /// constraints only (the pipeline's owner band on scattered samples).
+    fn owns(&self, i: usize) -> bool {
+        let _ = i;
+        true
+    }
 }
 
 impl SphereSet for [Sphere] {

@@ -49,6 +49,8 @@ pub(crate) struct UnitBox {
     grid: Option<Grid>,
     /// The noise shrink of the radii ([`crate::InputReport::radius_scale`]; 1: none).
     shrink: f64,
+    /// Which spheres may own tangency points, when not all may ([`UnitBox::band_locally`]).
+    owners: Option<Vec<bool>>,
 }
 
 impl UnitBox {
@@ -84,7 +86,54 @@ impl UnitBox {
                 Grid::new(g.dims(), (g.origin() - trans) / scale, g.spacing() / scale).ok()
             }),
             shrink,
+            owners: None,
         }
+    }
+
+    /// Scattered samples' owner band: the spheres at least `band` local spacings large (the
+    /// distance from the centre to the [`LOCAL_SPACING_NEIGHBOUR`]th nearest other sample) own
+    /// no point; they stay constraints. On a grid that distance is the spacing, and the grid's
+    /// band is the owner radius instead. Returns how many spheres it keeps as constraints only
+    /// (below the clamp, which keeps its own). Nothing changes for a grid, or for samples a k-d
+    /// tree cannot hold.
+    pub(crate) fn band_locally(&mut self, band: f64) -> usize {
+        use kiddo::{ImmutableKdTree, SquaredEuclidean};
+        use rayon::prelude::*;
+        let Centers::Points(centers) = &self.centers else {
+            return 0;
+        };
+        if centers.len() <= LOCAL_SPACING_NEIGHBOUR {
+            return 0;
+        }
+        let pts: Vec<[f64; 3]> = centers.iter().map(|p| p.to_array()).collect();
+        let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&pts) else {
+            return 0;
+        };
+        // The sample itself is among its nearest, at distance 0.
+        let Some(k) = std::num::NonZero::new(LOCAL_SPACING_NEIGHBOUR + 1) else {
+            return 0;
+        };
+        let owners: Vec<bool> = (0..centers.len())
+            .into_par_iter()
+            .map(|i| {
+                let nearest = tree
+                    .query(&pts[i])
+                    .nearest_n::<SquaredEuclidean<f64>>(k)
+                    .execute();
+                let spacing = nearest
+                    .iter()
+                    .map(|n| n.distance)
+                    .fold(0.0, f64::max)
+                    .sqrt();
+                // Coincident samples have no spacing to speak of: they keep their points.
+                spacing == 0.0 || self.radius(i) < band * spacing
+            })
+            .collect();
+        let kept = (0..owners.len())
+            .filter(|&i| !owners[i] && self.radius(i) < self.clamp)
+            .count();
+        self.owners = Some(owners);
+        kept
     }
 
     /// How much larger than its (shrunk) sphere a sample's own tangency points lie: its value
@@ -276,7 +325,18 @@ impl SphereSet for UnitBox {
             self.shrink * s
         }
     }
+
+    fn owns(&self, i: usize) -> bool {
+        self.owners.as_ref().is_none_or(|o| o[i])
+    }
 }
+
+/// The neighbour whose distance is a scattered sample's local spacing
+/// ([`UnitBox::band_locally`]): on a grid the fourth nearest sample is one spacing away, and for
+/// samples drawn uniformly at random the mean distance to the fourth nearest is
+/// `Gamma(4 + 1/3) / Gamma(4) (3 / (4 pi))^(1/3)`, 0.96 times the spacing the volume per sample
+/// gives (the k-th nearest neighbour distances of a Poisson process).
+pub(crate) const LOCAL_SPACING_NEIGHBOUR: usize = 4;
 
 /// The samples at a scale where squared distances neither overflow nor underflow, or `None` when
 /// they are at one already (every input of ordinary size). Positions and values are multiplied by

@@ -113,10 +113,13 @@ impl<'a> Plan<'a> {
                 "field = level-set and field = bound read the samples on a grid (its smooth interpolant's zero set); these are scattered (read them as distances: field = distance or auto)".into(),
             ));
         }
-        let unit = UnitBox::new(&samples, input.clamp, input.radius_scale);
-        let band = match params.owner_band {
-            Some(k) if unit.on_grid() => k * unit.spacing(),
-            _ => f64::INFINITY,
+        let mut unit = UnitBox::new(&samples, input.clamp, input.radius_scale);
+        // On a grid the band is a radius; scattered samples' spacing varies, and each sphere is
+        // measured against its own.
+        let (band, far_spheres) = match params.owner_band {
+            Some(k) if unit.on_grid() => (k * unit.spacing(), 0),
+            Some(k) => (f64::INFINITY, unit.band_locally(k)),
+            None => (f64::INFINITY, 0),
         };
         let owner_radius = unit.clamp.min(band);
         let spacing = Some(unit.spacing());
@@ -125,7 +128,7 @@ impl<'a> Plan<'a> {
                 .filter(|s| s.radius >= owner_radius && s.radius < unit.clamp)
                 .count()
         } else {
-            0
+            far_spheres
         };
         let mut feasible = params.feasible_params(unit.len(), owner_radius, unit.owner_scale());
         let raster_radius = RASTER_REACH * owner_radius;

@@ -343,48 +343,72 @@ fn spheres_beyond_the_owner_band_own_no_point_and_stay_constraints() {
     assert!(worst < 0.5 * h, "max vertex distance {worst}, spacing {h}");
 }
 
-/// Scattered samples, whose spacing varies, give every sphere points whatever the owner band.
+/// Scattered samples are banded by each sphere's own spacing, the distance from its centre to the
+/// fourth nearest other sample (brute force here): the spheres at or beyond the band own no point
+/// and are counted as far. On a lattice given as scattered samples that distance is the grid's
+/// spacing, and the band leaves the grid's far spheres. Without a band every sphere may own points.
 #[test]
-fn scattered_samples_ignore_the_owner_band() {
+fn scattered_samples_are_banded_by_their_own_spacing() {
     let torus = Analytic::Torus {
         major: 0.55,
         minor: 0.25,
     };
+    let band = 2.0;
+    let run = |samples: &SdfSamples, owner_band: Option<f64>| {
+        let params = Params {
+            rounds: Some(1),
+            owner_band,
+            ..Params::default()
+        };
+        reconstruct(samples, &params).expect("torus").report
+    };
     let samples = scattered_samples(torus, 3000, 9);
+    let p: Vec<DVec3> = (0..samples.len()).map(|i| samples.position(i)).collect();
+    // Each sample's value over its spacing; the pipeline measures both in its unit box, which
+    // may round a ratio this close to the band the other way.
+    let ratios: Vec<f64> = (0..p.len())
+        .map(|i| {
+            let mut d: Vec<f64> = (0..p.len())
+                .filter(|&j| j != i)
+                .map(|j| p[i].distance(p[j]))
+                .collect();
+            d.sort_by(f64::total_cmp);
+            samples.values()[i].abs() / d[3]
+        })
+        .collect();
+    let far = ratios.iter().filter(|&&r| r >= band).count();
+    let close = ratios.iter().filter(|&&r| (r - band).abs() < 1e-9).count();
+    assert!(far > p.len() / 4 && far < p.len() * 3 / 4, "{far} far");
     let out = reconstruct(
         &samples,
         &Params {
             rounds: Some(1),
-            owner_band: Some(0.5),
+            owner_band: Some(band),
             ..Params::default()
         },
     )
     .expect("torus");
-    assert_eq!(out.report.final_solve.far_spheres, 0);
-    let owners: std::collections::BTreeSet<u32> = out.points.owners.iter().copied().collect();
+    let counted = out.report.final_solve.far_spheres;
     assert!(
-        owners.len() + out.report.final_solve.spheres_without_point == samples.len(),
-        "{} owners, {} without a point, {} samples",
-        owners.len(),
-        out.report.final_solve.spheres_without_point,
-        samples.len()
+        counted.abs_diff(far) <= close,
+        "{counted} far, {far} by brute force"
     );
-    // The same band on a grid leaves most spheres without points.
+    for &o in &out.points.owners {
+        assert!(ratios[o as usize] < band + 1e-9, "sample {o}");
+    }
+    let r = run(&samples, None);
+    assert_eq!(r.final_solve.far_spheres, 0);
+    // A lattice as scattered samples: the grid's band. The lattice's corners, whose fourth
+    // neighbour is a diagonal away, are far from the torus either way.
     let grid = grid_samples(torus, 14);
-    let banded = reconstruct(
-        &grid,
-        &Params {
-            rounds: Some(1),
-            owner_band: Some(0.5),
-            ..Params::default()
-        },
+    let lattice = SdfSamples::scattered(
+        (0..grid.len()).map(|i| grid.position(i)).collect(),
+        grid.values().to_vec(),
     )
-    .expect("torus grid");
-    assert!(
-        banded.report.final_solve.far_spheres * 2 > grid.len(),
-        "{:?}",
-        banded.report.final_solve.far_spheres
-    );
+    .expect("lattice");
+    let on_grid = run(&grid, Some(band)).final_solve.far_spheres;
+    assert!(on_grid * 2 > grid.len(), "{on_grid}");
+    assert_eq!(run(&lattice, Some(band)).final_solve.far_spheres, on_grid);
 }
 
 /// A torus thinner than the grid (tube radius 0.03, spacing 2/21, its core circle halfway between
