@@ -90,13 +90,32 @@ impl UnitBox {
         }
     }
 
+    /// The owner band ([`crate::Params::owner_band`], in sample spacings): the owner radius (the
+    /// spheres at least this large own no point: the clamp, and on a grid `band` spacings) and
+    /// the count of spheres below the clamp that the band keeps as constraints only. Scattered
+    /// samples' spacing varies, and each sphere is measured against its own
+    /// ([`UnitBox::band_locally`]).
+    pub(crate) fn band(&mut self, band: Option<f64>) -> (f64, usize) {
+        match band {
+            Some(k) if self.on_grid() => {
+                let r = self.clamp.min(k * self.spacing());
+                let far = (self.spheres())
+                    .filter(|s| s.radius >= r && s.radius < self.clamp)
+                    .count();
+                (r, far)
+            }
+            Some(k) => (self.clamp, self.band_locally(k)),
+            None => (self.clamp, 0),
+        }
+    }
+
     /// Scattered samples' owner band: the spheres at least `band` local spacings large (the
     /// distance from the centre to the [`LOCAL_SPACING_NEIGHBOUR`]th nearest other sample) own
     /// no point; they stay constraints. On a grid that distance is the spacing, and the grid's
     /// band is the owner radius instead. Returns how many spheres it keeps as constraints only
     /// (below the clamp, which keeps its own). Nothing changes for a grid, or for samples a k-d
     /// tree cannot hold.
-    pub(crate) fn band_locally(&mut self, band: f64) -> usize {
+    fn band_locally(&mut self, band: f64) -> usize {
         use kiddo::{ImmutableKdTree, SquaredEuclidean};
         use rayon::prelude::*;
         let Centers::Points(centers) = &self.centers else {

@@ -114,22 +114,8 @@ impl<'a> Plan<'a> {
             ));
         }
         let mut unit = UnitBox::new(&samples, input.clamp, input.radius_scale);
-        // On a grid the band is a radius; scattered samples' spacing varies, and each sphere is
-        // measured against its own.
-        let (band, far_spheres) = match params.owner_band {
-            Some(k) if unit.on_grid() => (k * unit.spacing(), 0),
-            Some(k) => (f64::INFINITY, unit.band_locally(k)),
-            None => (f64::INFINITY, 0),
-        };
-        let owner_radius = unit.clamp.min(band);
+        let (owner_radius, far_spheres) = unit.band(params.owner_band);
         let spacing = Some(unit.spacing());
-        let far_spheres = if owner_radius < unit.clamp {
-            (unit.spheres())
-                .filter(|s| s.radius >= owner_radius && s.radius < unit.clamp)
-                .count()
-        } else {
-            far_spheres
-        };
         let mut feasible = params.feasible_params(unit.len(), owner_radius, unit.owner_scale());
         let raster_radius = RASTER_REACH * owner_radius;
         let t = std::time::Instant::now();

@@ -116,6 +116,18 @@ fn the_samples_and_the_mesh_do_not_depend_on_the_thread_count() {
     assert_eq!(one.reconstruction.mesh, two.reconstruction.mesh);
 }
 
+/// The adaptive passes keep every sphere as an owner whatever the owner band, while the same
+/// samples reconstructed as scattered samples keep the spheres beyond their own band as
+/// constraints only.
+#[test]
+fn the_adaptive_passes_keep_every_sphere_as_an_owner() {
+    let out = run(TORUS, 2_000, &params(2)).expect("adaptive");
+    assert_eq!(out.reconstruction.report.final_solve.far_spheres, 0);
+    let again = rfta::reconstruct(&out.samples, &params(2)).expect("scattered");
+    let far = again.report.final_solve.far_spheres;
+    assert!(far > 0 && far < out.samples.len(), "{far} far");
+}
+
 /// The oracle is asked exactly as often as the report says, never beyond the budget.
 #[test]
 fn the_report_counts_every_evaluation() {
