@@ -355,7 +355,7 @@ impl SphereSet for UnitBox {
 /// samples drawn uniformly at random the mean distance to the fourth nearest is
 /// `Gamma(4 + 1/3) / Gamma(4) (3 / (4 pi))^(1/3)`, 0.96 times the spacing the volume per sample
 /// gives (the k-th nearest neighbour distances of a Poisson process).
-pub(crate) const LOCAL_SPACING_NEIGHBOUR: usize = 4;
+const LOCAL_SPACING_NEIGHBOUR: usize = 4;
 
 /// The samples at a scale where squared distances neither overflow nor underflow, or `None` when
 /// they are at one already (every input of ordinary size). Positions and values are multiplied by
