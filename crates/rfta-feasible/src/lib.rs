@@ -337,8 +337,9 @@ pub fn transport(
 /// sphere, the empty-space sample nearest its centre projected onto it, then [`local_search`]
 /// against `tree` (a batch of the same sign set). Spheres that end infeasible, reach
 /// [`Params::owner_radius`], are not owners ([`SphereSet::owns`]) or have zero radius (a sample
-/// exactly on the surface gives no normal) get no point. With `done`, 1 is added to it as each sphere of `set` is finished (for
-/// progress reports from another thread; the result does not depend on it).
+/// exactly on the surface gives no normal) get no point. With `done`, 1 is added to it as each
+/// sphere of `set` is finished (for progress reports from another thread; the result does not
+/// depend on it).
 pub fn initial_points(
     spheres: &(impl SphereSet + ?Sized),
     values: &[f64],
@@ -361,9 +362,11 @@ pub fn initial_points(
         .map(|&i| {
             let s = params.owner(spheres.sphere(i as usize));
             let v = values[i as usize];
-            // Owners are chosen by their radius as constraints, the caller's measure.
-            let owner = spheres.owns(i as usize);
-            if !owner || spheres.radius(i as usize) >= params.owner_radius || s.radius <= 0.0 {
+            // Owners are chosen by their radius as constraints, the caller's measure, and by
+            // the set.
+            let owner =
+                spheres.owns(i as usize) && spheres.radius(i as usize) < params.owner_radius;
+            if !owner || s.radius <= 0.0 {
                 return Vec::new();
             }
             let nn = kd

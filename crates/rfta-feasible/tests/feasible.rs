@@ -109,6 +109,15 @@ fn check_points(points: &TangentPoints, spheres: &[Sphere], params: &Params) {
     }
 }
 
+/// Empty space: the points of a 40^3 lattice over the unit cube outside every sphere.
+fn empty_space(spheres: &[Sphere]) -> Vec<DVec3> {
+    (0..40)
+        .flat_map(|i| (0..40).flat_map(move |j| (0..40).map(move |k| (i, j, k))))
+        .map(|(i, j, k)| (DVec3::new(i as f64, j as f64, k as f64) + 0.5) / 40.0)
+        .filter(|p| spheres.iter().all(|s| (*p - s.center).length() > s.radius))
+        .collect()
+}
+
 #[test]
 fn initial_points_of_a_sphere_sdf_are_feasible_and_hug_the_surface() {
     let (spheres, values) = sphere_grid();
@@ -118,18 +127,7 @@ fn initial_points_of_a_sphere_sdf_are_feasible_and_hug_the_surface() {
     };
     let all: Vec<u32> = (0..spheres.len() as u32).collect();
     let tree = SphereTree::new(&spheres);
-    // Empty space: a fine lattice of points outside every sphere.
-    let mut empty = Vec::new();
-    for i in 0..40 {
-        for j in 0..40 {
-            for k in 0..40 {
-                let p = (DVec3::new(i as f64, j as f64, k as f64) + 0.5) / 40.0;
-                if spheres.iter().all(|s| (p - s.center).length() > s.radius) {
-                    empty.push(p);
-                }
-            }
-        }
-    }
+    let empty = empty_space(&spheres);
     for set in [
         all.iter()
             .copied()
@@ -241,11 +239,7 @@ fn spheres_the_set_keeps_as_constraints_own_no_point() {
     let outside: Vec<u32> = (0..spheres.len() as u32)
         .filter(|&i| values[i as usize] > 0.0)
         .collect();
-    let empty: Vec<DVec3> = (0..40)
-        .flat_map(|i| (0..40).flat_map(move |j| (0..40).map(move |k| (i, j, k))))
-        .map(|(i, j, k)| (DVec3::new(i as f64, j as f64, k as f64) + 0.5) / 40.0)
-        .filter(|p| spheres.iter().all(|s| (*p - s.center).length() > s.radius))
-        .collect();
+    let empty = empty_space(&spheres);
     let all = initial_points(&spheres, &values, &outside, &empty, &tree, &params, None);
     let some = initial_points(&set, &values, &outside, &empty, &tree, &params, None);
     let even = |c: &TangentPoints| c.owners.iter().filter(|&&o| o % 2 == 0).count();

@@ -20,7 +20,8 @@
 //! The defaults ([`Params::default`]) are the paper's rounds, points per sphere, batch, step and
 //! tolerance, with two departures chosen by measurement (docs/speed.md): the Poisson depth follows
 //! the sample spacing ([`spsr_depth_for`]) and only spheres within `OWNER_BAND` (3.0) spacings of
-//! the surface own points (scattered samples: each sphere's own spacing). [`Params::paper_table`] is the setting of its Table 2.
+//! the surface own points (scattered samples: each sphere's own spacing). [`Params::paper_table`]
+//! is the setting of its Table 2.
 //! Results are deterministic for a given seed, whatever the thread count.
 //!
 //! Before any of that, the values are checked ([`check`]): fields that are not a distance

@@ -202,7 +202,8 @@ pub(crate) const CELLS_PER_SPACING: f64 = 4.0;
 
 /// The default [`Params::owner_band`]: spheres within 3 sample spacings of the surface own points;
 /// the far ones' points only repeat, less precisely, what the near ones say (docs/speed.md; on
-/// scattered samples uniform in their box, 26% lower mean Chamfer and a sixth of the time).
+/// scattered samples uniform in their box, mean Chamfer 26% lower in a sixth of the CPU time at
+/// 29,791 samples, 37% lower in an eighth at 103,823).
 pub(crate) const OWNER_BAND: f64 = 3.0;
 
 /// With an owner band, only spheres smaller than this many owner radii are rasterized for the
